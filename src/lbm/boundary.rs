@@ -1,0 +1,203 @@
+//! Boundary conditions: halo fills (periodic, free-slip, outflow) and the link
+//! reconstruction of special cells (half-way bounce-back with Ladd's moving-wall term,
+//! Zou–He velocity and pressure faces and corners).
+
+use super::d2q9::{rotate, CX, CY, MIRROR_X, MIRROR_Y, OPP, Q, W};
+use super::lattice::{Face, FaceCondition, Lattice, FLUID, MAX_SOLID, OPEN_CORNER, OPEN_WEST};
+use super::real::Real;
+
+impl<T: Real> Lattice<T> {
+    /// Fill the halo of the current buffer from the interior: periodic wrap, specular
+    /// mirror (free slip) or zero-gradient copy (outflow). Wall and open halos are never
+    /// read as populations, so they are left alone. x faces first (interior rows), then y
+    /// faces over the full padded width, so corners are consistent.
+    pub(crate) fn fill_halo(&mut self) {
+        let (nx, ny, stride, plane) = (self.nx, self.ny, self.stride, self.plane);
+        let buf = &mut self.buf[self.cur];
+        for (face, halo_x, inner_x, wrap_x) in [(Face::West, 0, 1, nx), (Face::East, nx + 1, nx, 1)]
+        {
+            let map: Option<(&[usize; Q], usize)> = match self.faces[face as usize] {
+                FaceCondition::Periodic => Some((&IDENTITY, wrap_x)),
+                FaceCondition::FreeSlip => Some((&MIRROR_X, inner_x)),
+                FaceCondition::Outflow => Some((&IDENTITY, inner_x)),
+                _ => None,
+            };
+            if let Some((dirs, from_x)) = map {
+                for yp in 1..=ny {
+                    for i in 0..Q {
+                        buf[i * plane + yp * stride + halo_x] =
+                            buf[dirs[i] * plane + yp * stride + from_x];
+                    }
+                }
+            }
+        }
+        for (face, halo_y, inner_y, wrap_y) in
+            [(Face::South, 0, 1, ny), (Face::North, ny + 1, ny, 1)]
+        {
+            let map: Option<(&[usize; Q], usize)> = match self.faces[face as usize] {
+                FaceCondition::Periodic => Some((&IDENTITY, wrap_y)),
+                FaceCondition::FreeSlip => Some((&MIRROR_Y, inner_y)),
+                FaceCondition::Outflow => Some((&IDENTITY, inner_y)),
+                _ => None,
+            };
+            if let Some((dirs, from_y)) = map {
+                for i in 0..Q {
+                    let (dst, src) = (
+                        i * plane + halo_y * stride,
+                        dirs[i] * plane + from_y * stride,
+                    );
+                    buf.copy_within(src..src + stride, dst);
+                }
+            }
+        }
+    }
+
+    /// Pre-collision shifted populations of fluid cell (x, y) read from `src`, with links
+    /// from solids bounced back (Ladd 1994 moving-wall term) and links from open faces
+    /// reconstructed (Zou & He 1997). Momentum handed to each solid is added to `force`
+    /// (indexed by solid id − 1) when given.
+    #[inline]
+    pub(crate) fn gather_special(
+        &self,
+        src: &[T],
+        x: usize,
+        y: usize,
+        mut force: Option<&mut [[f64; 2]]>,
+    ) -> [T; Q] {
+        let plane = self.plane;
+        let k = self.idx(x as isize, y as isize);
+        let mut h = [T::default(); Q];
+        let mut unknown = false;
+        for i in 0..Q {
+            let n = (k as isize - CX[i] as isize - CY[i] as isize * self.stride as isize) as usize;
+            let t = self.types[n];
+            if t == FLUID {
+                h[i] = src[i * plane + n];
+            } else if t <= MAX_SOLID {
+                let solid = &self.solids[t as usize - 1];
+                let cu = CX[i] as f64 * solid.velocity[0] + CY[i] as f64 * solid.velocity[1];
+                let back = src[OPP[i] * plane + k];
+                // Half-way bounce-back with wall velocity, ρ_w = 1 (Ladd 1994, eq. 3.3).
+                h[i] = back + T::from_f64(6.0 * W[i] * cu);
+                if let Some(f) = force.as_deref_mut() {
+                    // Momentum exchange: the solid receives −(f*_ī + f_i) c_i (Ladd 1994).
+                    let m = back.to_f64() + h[i].to_f64() + 2.0 * W[i];
+                    f[t as usize - 1][0] -= m * CX[i] as f64;
+                    f[t as usize - 1][1] -= m * CY[i] as f64;
+                }
+            } else {
+                debug_assert!((OPEN_WEST..=OPEN_CORNER).contains(&t));
+                unknown = true;
+            }
+        }
+        if unknown {
+            self.reconstruct_open(src, x, y, &mut h);
+        }
+        h
+    }
+
+    /// Zou–He reconstruction of the unknown links of a cell on one open face, or on the
+    /// corner of two.
+    fn reconstruct_open(&self, src: &[T], x: usize, y: usize, h: &mut [T; Q]) {
+        let open = |f: Face| self.faces[f as usize].is_open();
+        let xf = if x == 0 && open(Face::West) {
+            Some(Face::West)
+        } else if x + 1 == self.nx && open(Face::East) {
+            Some(Face::East)
+        } else {
+            None
+        };
+        let yf = if y == 0 && open(Face::South) {
+            Some(Face::South)
+        } else if y + 1 == self.ny && open(Face::North) {
+            Some(Face::North)
+        } else {
+            None
+        };
+        let mut f = [0.0f64; Q];
+        for i in 0..Q {
+            f[i] = h[i].to_f64() + W[i];
+        }
+        match (xf, yf) {
+            (Some(a), Some(b)) => self.zou_he_corner(src, x, y, a, b, &mut f),
+            (Some(face), None) => self.zou_he_face(face, y, &mut f),
+            (None, Some(face)) => self.zou_he_face(face, x, &mut f),
+            (None, None) => unreachable!("open link without an open face at ({x}, {y})"),
+        }
+        for i in 0..Q {
+            h[i] = T::from_f64(f[i] - W[i]);
+        }
+    }
+
+    /// Prescribed velocity of an open face at position `s` along it (zero for pressure faces).
+    fn face_velocity(&self, face: Face, s: usize) -> Option<[f64; 2]> {
+        match &self.faces[face as usize] {
+            FaceCondition::Velocity(v) => Some(v[s]),
+            _ => None,
+        }
+    }
+
+    /// Zou & He (1997) on one face, written for the west face (eqs. 19–23 there) and
+    /// rotated onto the others. `f` holds full populations.
+    fn zou_he_face(&self, face: Face, s: usize, f: &mut [f64; Q]) {
+        let k = face.quarter_turns();
+        let r = |i: usize| rotate(i, k);
+        let (n, t) = (r(1), r(2));
+        let known = f[0] + f[r(2)] + f[r(4)] + 2.0 * (f[r(3)] + f[r(6)] + f[r(7)]);
+        let (rho, un, ut) = match &self.faces[face as usize] {
+            FaceCondition::Velocity(v) => {
+                let u = v[s];
+                let un = CX[n] as f64 * u[0] + CY[n] as f64 * u[1];
+                let ut = CX[t] as f64 * u[0] + CY[t] as f64 * u[1];
+                // ρ = [f0 + f2 + f4 + 2(f3 + f6 + f7)] / (1 − u_n) (Zou & He 1997, eq. 19).
+                (known / (1.0 - un), un, ut)
+            }
+            FaceCondition::Pressure(drho) => {
+                let rho = 1.0 + drho;
+                // u_n = 1 − [f0 + f2 + f4 + 2(f3 + f6 + f7)] / ρ, u_t = 0 (Zou & He 1997).
+                (rho, 1.0 - known / rho, 0.0)
+            }
+            _ => unreachable!("zou_he_face on a closed face"),
+        };
+        let half_diff = 0.5 * (f[r(2)] - f[r(4)]);
+        // Zou & He 1997, eqs. 20–22 (tangential term keeps u_t).
+        f[r(1)] = f[r(3)] + 2.0 / 3.0 * rho * un;
+        f[r(5)] = f[r(7)] - half_diff + rho * un / 6.0 + 0.5 * rho * ut;
+        f[r(8)] = f[r(6)] + half_diff + rho * un / 6.0 - 0.5 * rho * ut;
+    }
+
+    /// Corner between two open faces (Zou & He 1997, sec. 4; Hecht & Harting 2010, sec. 3.2):
+    /// density from the diagonal interior neighbour, the buried pair split to conserve mass.
+    fn zou_he_corner(&self, src: &[T], x: usize, y: usize, xf: Face, yf: Face, f: &mut [f64; Q]) {
+        let k = match (xf, yf) {
+            (Face::West, Face::South) => 0,
+            (Face::East, Face::South) => 1,
+            (Face::East, Face::North) => 2,
+            _ => 3,
+        };
+        let r = |i: usize| rotate(i, k);
+        let u = self
+            .face_velocity(yf, x)
+            .or_else(|| self.face_velocity(xf, y))
+            .unwrap_or([0.0, 0.0]);
+        let (a, b) = (r(1), r(2));
+        let ua = CX[a] as f64 * u[0] + CY[a] as f64 * u[1];
+        let ub = CX[b] as f64 * u[0] + CY[b] as f64 * u[1];
+        // Density of the interior neighbour along the inward diagonal (extrapolation).
+        let dn = r(5);
+        let nbr = self.idx(x as isize + CX[dn] as isize, y as isize + CY[dn] as isize);
+        let rho = 1.0
+            + (0..Q)
+                .map(|i| src[i * self.plane + nbr].to_f64())
+                .sum::<f64>();
+        f[r(1)] = f[r(3)] + 2.0 / 3.0 * rho * ua;
+        f[r(2)] = f[r(4)] + 2.0 / 3.0 * rho * ub;
+        f[r(5)] = f[r(7)] + rho * (ua + ub) / 6.0;
+        let rest = rho - (f[0] + f[r(1)] + f[r(2)] + f[r(3)] + f[r(4)] + f[r(5)] + f[r(7)]);
+        let skew = rho * (ub - ua) / 6.0;
+        f[r(6)] = 0.5 * (rest + skew);
+        f[r(8)] = 0.5 * (rest - skew);
+    }
+}
+
+const IDENTITY: [usize; Q] = [0, 1, 2, 3, 4, 5, 6, 7, 8];

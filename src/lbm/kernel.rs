@@ -1,0 +1,186 @@
+//! The fused pull stream–collide sweep (CPU, rayon): one parallel pass over rows per step.
+
+use super::collision::{Bgk, Collider, Collision, Mrt, Trt};
+use super::d2q9::{CX, CY, Q};
+use super::lattice::{Lattice, StepError};
+use super::real::Real;
+use rayon::prelude::*;
+
+/// A raw pointer that rayon tasks may share. Each row task writes only its own row of the
+/// destination buffer, so the writes never overlap.
+#[derive(Clone, Copy)]
+struct RowWriter<T>(*mut T);
+// SAFETY: the pointer targets the destination buffer, which outlives the sweep; tasks
+// write disjoint rows (see `sweep`).
+unsafe impl<T> Send for RowWriter<T> {}
+unsafe impl<T> Sync for RowWriter<T> {}
+
+impl<T: Real> Lattice<T> {
+    /// Advance one time step: fused stream–collide into the other buffer, swap, refill the
+    /// halo. Momentum exchanged with solids is available from [`Lattice::force_on`].
+    ///
+    /// Errors when a fluid cell's density becomes NaN or non-positive; the lattice then
+    /// still holds the last good state in its current buffer.
+    pub fn step(&mut self) -> Result<(), StepError> {
+        if self.step == 0 {
+            self.fill_halo();
+        }
+        let p = self.params;
+        match (self.collision, self.smagorinsky) {
+            (Collision::Bgk, false) => self.sweep(&Bgk::<T, false>(p)),
+            (Collision::Bgk, true) => self.sweep(&Bgk::<T, true>(p)),
+            (Collision::Trt { .. }, false) => self.sweep(&Trt::<T, false>(p)),
+            (Collision::Trt { .. }, true) => self.sweep(&Trt::<T, true>(p)),
+            (Collision::Mrt { .. }, false) => self.sweep(&Mrt::<T, false>(p)),
+            (Collision::Mrt { .. }, true) => self.sweep(&Mrt::<T, true>(p)),
+        }
+        self.step += 1;
+        if let Some(y) = self.row_bad.iter().position(|&b| b != 0) {
+            return Err(self.locate_instability(y));
+        }
+        self.cur ^= 1;
+        self.fill_halo();
+        // Deterministic reduction: rows in order, whatever the thread count.
+        let ns = self.solids.len();
+        for s in 0..ns {
+            let mut acc = [0.0; 2];
+            for y in 0..self.ny {
+                let f = self.row_force[y * ns + s];
+                acc[0] += f[0];
+                acc[1] += f[1];
+            }
+            self.force_on[s] = acc;
+        }
+        Ok(())
+    }
+
+    /// One parallel pass over all rows.
+    fn sweep<C: Collider<T>>(&mut self, c: &C) {
+        let mut dst = std::mem::take(&mut self.buf[self.cur ^ 1]);
+        let writer = RowWriter(dst.as_mut_ptr());
+        let ns = self.solids.len().max(1);
+        let mut row_bad = std::mem::take(&mut self.row_bad);
+        let mut row_force = std::mem::take(&mut self.row_force);
+        let this = &*self;
+        let src = &this.buf[this.cur];
+        row_bad
+            .par_iter_mut()
+            .zip(row_force.par_chunks_mut(ns))
+            .enumerate()
+            .with_min_len(4)
+            .for_each(|(y, (bad, forces))| {
+                forces.fill([0.0; 2]);
+                let yp = y + 1;
+                let row = &this.plan[y];
+                let mut b = false;
+                for &(x0, x1) in &row.bulk {
+                    // SAFETY: row yp of the destination is written by this task only.
+                    b |= unsafe {
+                        bulk_run(
+                            c,
+                            src,
+                            writer,
+                            this.plane,
+                            this.stride,
+                            yp,
+                            x0 as usize,
+                            x1 as usize,
+                        )
+                    };
+                }
+                for &x in &row.special {
+                    let mut h = this.gather_special(src, x as usize, y, Some(forces));
+                    let m = c.collide(&mut h);
+                    let k = yp * this.stride + x as usize + 1;
+                    for (i, hi) in h.iter().enumerate() {
+                        // SAFETY: as above, a cell of this task's own row.
+                        unsafe { *writer.0.add(i * this.plane + k) = *hi };
+                    }
+                    b |= !(m.rho > T::default());
+                }
+                *bad = b as u8;
+            });
+        self.row_bad = row_bad;
+        self.row_force = row_force;
+        self.buf[self.cur ^ 1] = dst;
+    }
+
+    /// Find the first bad cell of row `y` in the freshly written buffer.
+    fn locate_instability(&self, y: usize) -> StepError {
+        let dst = &self.buf[self.cur ^ 1];
+        let mut worst = (0, f64::NAN);
+        for x in 0..self.nx {
+            if !self.is_fluid(x, y) {
+                continue;
+            }
+            let k = self.idx(x as isize, y as isize);
+            let rho = 1.0
+                + (0..Q)
+                    .map(|i| dst[i * self.plane + k].to_f64())
+                    .sum::<f64>();
+            if !(rho > 0.0) {
+                worst = (x, rho);
+                break;
+            }
+        }
+        StepError {
+            step: self.step,
+            x: worst.0,
+            y,
+            density: worst.1,
+        }
+    }
+}
+
+/// Stream–collide the bulk cells `[x0, x1)` of padded row `yp`. Returns true if any cell's
+/// density went NaN or non-positive.
+///
+/// # Safety
+/// `dst` must point to a buffer of the same layout as `src`, and no other thread may touch
+/// row `yp` of it during the call.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn bulk_run<T: Real, C: Collider<T>>(
+    c: &C,
+    src: &[T],
+    dst: RowWriter<T>,
+    plane: usize,
+    stride: usize,
+    yp: usize,
+    x0: usize,
+    x1: usize,
+) -> bool {
+    let n = x1 - x0;
+    // Pull: population i at x comes from x − c_i.
+    let s = |i: usize| {
+        let start = i * plane
+            + (yp as isize - CY[i] as isize) as usize * stride
+            + (x0 as isize + 1 - CX[i] as isize) as usize;
+        &src[start..start + n]
+    };
+    let d =
+        |i: usize| std::slice::from_raw_parts_mut(dst.0.add(i * plane + yp * stride + x0 + 1), n);
+    let (s0, s1, s2, s3, s4, s5, s6, s7, s8) =
+        (s(0), s(1), s(2), s(3), s(4), s(5), s(6), s(7), s(8));
+    let (d0, d1, d2, d3, d4, d5, d6, d7, d8) =
+        (d(0), d(1), d(2), d(3), d(4), d(5), d(6), d(7), d(8));
+    let zero = T::default();
+    let mut bad = 0u32;
+    for k in 0..n {
+        let mut h = [
+            s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k],
+        ];
+        let m = c.collide(&mut h);
+        d0[k] = h[0];
+        d1[k] = h[1];
+        d2[k] = h[2];
+        d3[k] = h[3];
+        d4[k] = h[4];
+        d5[k] = h[5];
+        d6[k] = h[6];
+        d7[k] = h[7];
+        d8[k] = h[8];
+        bad |= (!(m.rho > zero)) as u32;
+    }
+    bad != 0
+}

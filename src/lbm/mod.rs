@@ -1,0 +1,21 @@
+//! 2-D lattice Boltzmann (D2Q9) fluid solver.
+//!
+//! Storage is structure-of-arrays of the *shifted* distributions `h_i = f_i - w_i`
+//! (so f32 keeps its digits for the small deviations from rest), padded by one halo
+//! cell on every side. A step is one fused pull stream–collide sweep from one buffer into
+//! the other; the buffers hold post-collision values, which is what half-way bounce-back
+//! needs. Bulk cells run a vectorised row kernel; cells touching solids or open boundaries
+//! run a scalar path that reconstructs their links first.
+
+pub mod boundary;
+pub mod collision;
+pub mod d2q9;
+pub mod fields;
+pub mod geometry;
+pub mod kernel;
+pub mod lattice;
+pub mod real;
+
+pub use collision::{Collision, CollisionParams};
+pub use lattice::{Lattice, LatticeSetup, StepError};
+pub use real::Real;
