@@ -1,1 +1,189 @@
-fn main() {}
+//! The `grainflow` binary: parse the CLI, load the scene, run it. The only place that uses anyhow.
+
+mod cli;
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use cli::{Cli, Command, PrecisionArg};
+use grainflow::run::{run, step_count, Precision, RunOptions, Status};
+use grainflow::scene;
+
+fn main() {
+    match real_main() {
+        Ok(code) => std::process::exit(code),
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::exit(1);
+        }
+    }
+}
+
+fn real_main() -> Result<i32> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Info => {
+            println!("grainflow {}", env!("CARGO_PKG_VERSION"));
+            println!(
+                "threads: {} (rayon; set --threads or RAYON_NUM_THREADS)",
+                rayon::current_num_threads()
+            );
+            println!(
+                "precisions: f32, f64 (CPU kernel, structure-of-arrays, fused pull stream-collide)"
+            );
+            println!("ranks: 1 (MPI decomposition not yet built in)");
+            println!("GPU backends: none built in yet");
+            Ok(0)
+        }
+        Command::Check { scene } => {
+            let s = scene::load(&scene)?;
+            print_check(&s);
+            Ok(0)
+        }
+        Command::Run {
+            scene,
+            out,
+            precision,
+            threads,
+            steps,
+            quiet,
+        } => {
+            if let Some(t) = threads {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build_global()
+                    .context("setting up the thread pool")?;
+            }
+            let s = scene::load(&scene)?;
+            for w in &s.warnings {
+                eprintln!("warning: {w}");
+            }
+            let out = out.unwrap_or_else(|| {
+                let stem = scene
+                    .file_stem()
+                    .and_then(|x| x.to_str())
+                    .unwrap_or("scene");
+                let parent = scene
+                    .parent()
+                    .and_then(|p| p.file_name())
+                    .and_then(|x| x.to_str())
+                    .unwrap_or("");
+                let name = if stem == "scene" && !parent.is_empty() {
+                    parent
+                } else {
+                    stem
+                };
+                std::path::PathBuf::from("runs").join(name)
+            });
+            let opts = RunOptions {
+                out_dir: out.clone(),
+                precision: precision.map(|p| match p {
+                    PrecisionArg::F32 => Precision::F32,
+                    PrecisionArg::F64 => Precision::F64,
+                }),
+                steps,
+                progress: !quiet,
+            };
+            eprintln!(
+                "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} threads",
+                scene.display(),
+                step_count(&s, steps),
+                s.units.tau,
+                s.units.mach,
+                s.units.reynolds,
+                rayon::current_num_threads()
+            );
+            let summary = run(&s, &opts)?;
+            println!(
+                "{} steps in {:.2} s: {:.1} MLUPS (kernel {:.1})",
+                summary.steps, summary.wall_time_s, summary.mlups, summary.kernel_mlups
+            );
+            for (k, v) in &summary.results {
+                println!("  {k} = {v:.6e}");
+            }
+            for c in &summary.checks {
+                println!(
+                    "  check {}: {} = {} -> {}",
+                    if c.passed { "PASS" } else { "FAIL" },
+                    c.quantity,
+                    c.value
+                        .map(|v| format!("{v:.6e}"))
+                        .unwrap_or_else(|| "missing".into()),
+                    describe_bounds(c)
+                );
+            }
+            println!(
+                "output: {}  (summary.json, fields.h5 + fields.xdmf, pictures/, probe_*.csv)",
+                out.display()
+            );
+            Ok(match summary.status {
+                Status::Ok => 0,
+                Status::ChecksFailed => {
+                    eprintln!("error: at least one check failed");
+                    2
+                }
+                Status::Unstable => {
+                    eprintln!("error: {}", summary.error.as_deref().unwrap_or("unstable"));
+                    eprintln!(
+                        "the output written so far is kept in {}, including the last good state",
+                        out.display()
+                    );
+                    3
+                }
+            })
+        }
+    }
+}
+
+fn describe_bounds(c: &grainflow::analysis::checks::CheckOutcome) -> String {
+    let mut parts = Vec::new();
+    if let Some(e) = c.expected {
+        parts.push(format!("expected {e}"));
+    }
+    if let Some(t) = c.tolerance {
+        parts.push(format!("± {t}"));
+    }
+    if let Some(t) = c.relative_tolerance {
+        parts.push(format!("± {}%", t * 100.0));
+    }
+    if let Some(m) = c.min {
+        parts.push(format!("≥ {m}"));
+    }
+    if let Some(m) = c.max {
+        parts.push(format!("≤ {m}"));
+    }
+    parts.join(" ")
+}
+
+fn print_check(s: &scene::ValidScene) {
+    let u = &s.units;
+    let [nx, ny] = s.scene.domain.cells;
+    println!(
+        "scene {} is valid{}",
+        s.path.display(),
+        if s.scene.title.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", s.scene.title)
+        }
+    );
+    println!(
+        "  lattice          {nx} × {ny} cells, Δx = {:.6e} m",
+        u.dx_m
+    );
+    println!("  time step        Δt = {:.6e} s", u.dt_s);
+    println!("  relaxation time  τ = {:.6}", u.tau);
+    println!("  lattice ν        {:.6e}", u.nu_lattice);
+    println!("  lattice velocity {:.6} (Mach {:.4})", u.u_lattice, u.mach);
+    println!("  Reynolds number  {:.4}", u.reynolds);
+    println!("  steps            {}", step_count(s, None));
+    let cells = ((nx + 2) * (ny + 2)) as f64;
+    let bytes = |b: f64| 2.0 * 9.0 * cells * b + cells * 2.0;
+    println!(
+        "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 (two distribution buffers + cell types)",
+        bytes(8.0) / 1048576.0,
+        bytes(4.0) / 1048576.0
+    );
+    for w in &s.warnings {
+        println!("  warning: {w}");
+    }
+}

@@ -40,11 +40,6 @@ pub struct Totals {
 }
 
 impl<T: Real> Lattice<T> {
-    /// Refill the halo after initial conditions were set with [`Lattice::set_equilibrium`].
-    pub fn refresh_halo(&mut self) {
-        self.fill_halo();
-    }
-
     /// Pre-collision populations of interior cell (x, y) at the current time, boundary
     /// links reconstructed.
     pub(crate) fn gather(&self, x: usize, y: usize) -> [T; Q] {

@@ -16,12 +16,20 @@ unsafe impl<T> Send for RowWriter<T> {}
 unsafe impl<T> Sync for RowWriter<T> {}
 
 impl<T: Real> Lattice<T> {
-    /// Advance one time step: fused stream–collide into the other buffer, swap, refill the
-    /// halo. Momentum exchanged with solids is available from [`Lattice::force_on`].
+    /// Advance one time step: [`Lattice::stream_collide`] then [`Lattice::update_boundaries`].
+    pub fn step(&mut self) -> Result<(), StepError> {
+        self.stream_collide()?;
+        self.update_boundaries();
+        Ok(())
+    }
+
+    /// Fused stream–collide into the other buffer and swap; bounce-back and Zou–He links are
+    /// reconstructed inside the sweep, and the momentum exchanged with each solid is summed
+    /// (available from [`Lattice::force_on`]).
     ///
     /// Errors when a fluid cell's density becomes NaN or non-positive; the lattice then
-    /// still holds the last good state in its current buffer.
-    pub fn step(&mut self) -> Result<(), StepError> {
+    /// still holds the last good state.
+    pub fn stream_collide(&mut self) -> Result<(), StepError> {
         if self.step == 0 {
             self.fill_halo();
         }
@@ -34,12 +42,11 @@ impl<T: Real> Lattice<T> {
             (Collision::Mrt { .. }, false) => self.sweep(&Mrt::<T, false>(p)),
             (Collision::Mrt { .. }, true) => self.sweep(&Mrt::<T, true>(p)),
         }
-        self.step += 1;
         if let Some(y) = self.row_bad.iter().position(|&b| b != 0) {
             return Err(self.locate_instability(y));
         }
+        self.step += 1;
         self.cur ^= 1;
-        self.fill_halo();
         // Deterministic reduction: rows in order, whatever the thread count.
         let ns = self.solids.len();
         for s in 0..ns {
@@ -52,6 +59,12 @@ impl<T: Real> Lattice<T> {
             self.force_on[s] = acc;
         }
         Ok(())
+    }
+
+    /// Refill the halo from the interior (periodic, free-slip, outflow faces) so the next
+    /// sweep and any field read-out see the boundary values.
+    pub fn update_boundaries(&mut self) {
+        self.fill_halo();
     }
 
     /// One parallel pass over all rows.

@@ -1,0 +1,128 @@
+//! Derived quantities computed at the end of a run, and pass/fail checks on them.
+//!
+//! Each [`crate::scene::Analysis`] produces named results (`poiseuille.max_rel_error`,
+//! `<probe>.strouhal`, …). [`checks::evaluate`] compares them with the scene's checks.
+
+pub mod checks;
+pub mod flows;
+mod signals;
+
+use crate::io::probes::Series;
+use crate::lbm::fields::{Fields, Totals};
+use crate::scene::{Analysis, ValidScene};
+use std::collections::BTreeMap;
+use thiserror::Error;
+
+/// Named results, sorted by name.
+pub type Results = BTreeMap<String, f64>;
+
+/// An analysis that could not be computed.
+#[derive(Debug, Error)]
+#[error("analysis `{analysis}`: {message}")]
+pub struct AnalysisError {
+    /// Which analysis.
+    pub analysis: String,
+    /// What went wrong.
+    pub message: String,
+}
+
+/// What the analyses read: the final state and the recorded series.
+pub struct Inputs<'a> {
+    /// The scene.
+    pub scene: &'a ValidScene,
+    /// Final fields, lattice units.
+    pub fields: &'a Fields,
+    /// Steps taken.
+    pub steps: u64,
+    /// Probe series.
+    pub series: &'a [Series],
+    /// Totals at step 0 and at the end.
+    pub totals: (Totals, Totals),
+}
+
+/// The result names a scene's analyses will produce (to validate checks before running).
+pub fn result_names(scene: &ValidScene) -> Vec<String> {
+    let mut names = vec!["run.mass".to_string(), "run.max_speed_m_s".to_string()];
+    for a in &scene.scene.analyses {
+        match a {
+            Analysis::Poiseuille => names.extend(
+                [
+                    "max_rel_error",
+                    "l2_rel_error",
+                    "peak_rel_error",
+                    "centreline_velocity_m_s",
+                ]
+                .map(|q| format!("poiseuille.{q}")),
+            ),
+            Analysis::Couette => names.push("couette.l2_rel_error".into()),
+            Analysis::TaylorGreen => names.push("taylor_green.l2_rel_error".into()),
+            Analysis::Ghia { .. } => {
+                names.extend(["ghia.max_u_deviation".into(), "ghia.max_v_deviation".into()])
+            }
+            Analysis::ForceCoefficients { probe, .. } => names.extend([
+                format!("{probe}.drag_coefficient"),
+                format!("{probe}.lift_coefficient"),
+            ]),
+            Analysis::Strouhal { probe, .. } => names.extend([
+                format!("{probe}.strouhal"),
+                format!("{probe}.relative_oscillation"),
+            ]),
+            Analysis::MassDrift => names.push("mass.relative_drift".into()),
+        }
+    }
+    names
+}
+
+/// Run every analysis of the scene.
+pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
+    let mut r = Results::new();
+    let u = &inp.scene.units;
+    r.insert("run.mass".into(), inp.totals.1.mass);
+    r.insert(
+        "run.max_speed_m_s".into(),
+        u.velocity_to_si(inp.totals.1.max_speed),
+    );
+    for a in &inp.scene.scene.analyses {
+        match a {
+            Analysis::Poiseuille => flows::poiseuille(inp, &mut r)?,
+            Analysis::Couette => flows::couette(inp, &mut r)?,
+            Analysis::TaylorGreen => flows::taylor_green(inp, &mut r)?,
+            Analysis::Ghia {
+                u_reference,
+                v_reference,
+                column,
+            } => flows::ghia(inp, u_reference, v_reference, column, &mut r)?,
+            Analysis::ForceCoefficients {
+                probe,
+                velocity_m_s,
+                length_m,
+                average_last_s,
+            } => signals::force_coefficients(
+                inp,
+                probe,
+                *velocity_m_s,
+                *length_m,
+                *average_last_s,
+                &mut r,
+            )?,
+            Analysis::Strouhal {
+                probe,
+                velocity_m_s,
+                length_m,
+                skip_s,
+            } => signals::strouhal(inp, probe, *velocity_m_s, *length_m, *skip_s, &mut r)?,
+            Analysis::MassDrift => {
+                let (a, b) = (inp.totals.0.mass, inp.totals.1.mass);
+                r.insert("mass.relative_drift".into(), (b - a) / a);
+            }
+        }
+    }
+    Ok(r)
+}
+
+pub(crate) fn err(analysis: &str, message: impl Into<String>) -> AnalysisError {
+    AnalysisError {
+        analysis: analysis.into(),
+        message: message.into(),
+    }
+}

@@ -1,0 +1,54 @@
+//! Command-line interface (clap).
+
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// grainflow: lattice Boltzmann fluid–grain flows for geomechanics.
+#[derive(Debug, Parser)]
+#[command(name = "grainflow", version, about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Floating-point precision on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum PrecisionArg {
+    /// Single precision (half the memory traffic).
+    F32,
+    /// Double precision.
+    F64,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run a scene; exits 2 when a check fails and 3 when the run goes unstable.
+    Run {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output folder (default: runs/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Precision, overriding the scene's.
+        #[arg(long, value_enum)]
+        precision: Option<PrecisionArg>,
+        /// Worker threads (default: all cores, or RAYON_NUM_THREADS).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Number of steps, overriding the scene's.
+        #[arg(long)]
+        steps: Option<u64>,
+        /// No progress output.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Validate a scene and print the derived lattice parameters and memory estimate.
+    Check {
+        /// Scene file (TOML).
+        scene: PathBuf,
+    },
+    /// Print version, threads and build information.
+    Info,
+}

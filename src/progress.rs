@@ -1,0 +1,82 @@
+//! Progress reporting: an indicatif bar with step, simulated time, MLUPS and ETA on a
+//! terminal; plain periodic log lines otherwise (batch jobs, CI).
+
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::time::Instant;
+
+/// Progress of a time loop.
+pub struct Progress {
+    total: u64,
+    cells: f64,
+    dt: f64,
+    bar: Option<ProgressBar>,
+    log: bool,
+    start: Instant,
+    last_log: Instant,
+}
+
+impl Progress {
+    /// `total` steps over `cells` cells of time step `dt` seconds; `enabled = false` is silent.
+    pub fn new(total: u64, cells: f64, dt: f64, enabled: bool) -> Self {
+        let tty = std::io::stderr().is_terminal();
+        let bar = (enabled && tty).then(|| {
+            let b = ProgressBar::new(total);
+            b.set_style(
+                ProgressStyle::with_template(
+                    "{bar:40.cyan/blue} {pos}/{len} steps  {msg}  ETA {eta}",
+                )
+                .expect("static template")
+                .progress_chars("=> "),
+            );
+            b
+        });
+        let now = Instant::now();
+        Self {
+            total,
+            cells,
+            dt,
+            bar,
+            log: enabled && !tty,
+            start: now,
+            last_log: now,
+        }
+    }
+
+    /// Report that `step` steps are done.
+    pub fn update(&mut self, step: u64) {
+        let every = (self.total / 10).max(1);
+        if let Some(b) = &self.bar {
+            if step % 16 == 0 || step == self.total {
+                b.set_position(step);
+                b.set_message(format!(
+                    "t = {:.4e} s  {:.1} MLUPS",
+                    step as f64 * self.dt,
+                    self.mlups(step)
+                ));
+            }
+        } else if self.log && (step % every == 0 || self.last_log.elapsed().as_secs() >= 30) {
+            self.last_log = Instant::now();
+            let el = self.start.elapsed().as_secs_f64();
+            let eta = el / step as f64 * (self.total - step) as f64;
+            eprintln!(
+                "step {step}/{} ({:.0}%)  t = {:.4e} s  {:.1} MLUPS  elapsed {el:.1} s  ETA {eta:.1} s",
+                self.total,
+                100.0 * step as f64 / self.total as f64,
+                step as f64 * self.dt,
+                self.mlups(step)
+            );
+        }
+    }
+
+    fn mlups(&self, step: u64) -> f64 {
+        self.cells * step as f64 / self.start.elapsed().as_secs_f64().max(1e-9) / 1e6
+    }
+
+    /// Clear the bar.
+    pub fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}

@@ -1,0 +1,95 @@
+//! Scenes: TOML files in SI units, parsed strictly and validated before anything is
+//! allocated. [`load`] returns a [`ValidScene`]: the parsed scene, its derived lattice
+//! [`Units`] and any warnings.
+
+mod build;
+mod schema;
+mod units;
+mod validate;
+
+pub use build::{build_lattice, solid_id_of, BuiltGeometry};
+pub use schema::*;
+pub use units::{derive, TimeStepChoice, Units};
+
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a scene was rejected.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        /// Scene path.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax, an unknown key, a missing key or a wrong type (toml's message names the
+    /// key, line and column).
+    #[error("{path}: {message}")]
+    Parse {
+        /// Scene path.
+        path: PathBuf,
+        /// toml's message.
+        message: String,
+    },
+    /// A value that parses but is impossible.
+    #[error("{path}{}: `{key}`: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Invalid {
+        /// Scene path.
+        path: PathBuf,
+        /// 1-based line of the key, when it can be located.
+        line: Option<usize>,
+        /// The offending key.
+        key: String,
+        /// What is wrong and how to fix it.
+        message: String,
+    },
+}
+
+/// A scene that passed validation.
+#[derive(Debug, Clone)]
+pub struct ValidScene {
+    /// The parsed scene.
+    pub scene: Scene,
+    /// Derived lattice parameters.
+    pub units: Units,
+    /// Non-fatal findings (e.g. Mach > 0.1).
+    pub warnings: Vec<String>,
+    /// Directory of the scene file (relative paths in the scene resolve against it).
+    pub base_dir: PathBuf,
+    /// Path of the scene file.
+    pub path: PathBuf,
+}
+
+/// Read, parse and validate a scene file.
+pub fn load(path: &Path) -> Result<ValidScene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    parse(&text, path)
+}
+
+/// Parse and validate scene text; `path` is used in messages and to resolve relative files.
+pub fn parse(text: &str, path: &Path) -> Result<ValidScene, SceneError> {
+    let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
+        path: path.to_owned(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let ctx = validate::Context {
+        text,
+        path,
+        base_dir: &base_dir,
+    };
+    let (units, warnings) = validate::validate(&scene, &ctx)?;
+    Ok(ValidScene {
+        scene,
+        units,
+        warnings,
+        base_dir,
+        path: path.to_owned(),
+    })
+}

@@ -1,0 +1,392 @@
+//! The scene file schema (TOML). Every table rejects unknown keys; variants are tagged by
+//! `kind`, `shape` or `model`; SI units are in the field names.
+
+use serde::{Deserialize, Serialize};
+
+/// A whole scene. Only the physics it names is allocated and run.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Free text shown in reports.
+    #[serde(default)]
+    pub title: String,
+    /// The lattice.
+    pub domain: Domain,
+    /// The fluid and its lattice Boltzmann model.
+    pub fluid: Fluid,
+    /// Conditions on the four faces.
+    pub boundaries: Boundaries,
+    /// Solid obstacles (half-way bounce-back).
+    #[serde(default)]
+    pub obstacles: Vec<Obstacle>,
+    /// Run length and output.
+    pub run: Run,
+    /// Time series recorded during the run.
+    #[serde(default)]
+    pub probes: Vec<Probe>,
+    /// Derived quantities computed at the end of the run.
+    #[serde(default)]
+    pub analyses: Vec<Analysis>,
+    /// Pass/fail checks on probes and derived quantities.
+    #[serde(default)]
+    pub checks: Vec<Check>,
+}
+
+/// Lattice size and spacing. The domain spans [0, cells_x·dx] × [0, cells_y·dx].
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    /// Cells along x and y.
+    pub cells: [usize; 2],
+    /// Lattice spacing Δx in metres.
+    pub spacing_m: f64,
+}
+
+/// Fluid properties and model choices.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fluid {
+    /// Reference density ρ₀ (kg/m³); pressures are relative to ρ₀ c_s².
+    pub density_kg_m3: f64,
+    /// Kinematic viscosity ν (m²/s).
+    pub viscosity_m2_s: f64,
+    /// Largest velocity expected in the flow (m/s): sets the Mach number.
+    pub reference_velocity_m_s: f64,
+    /// Length used for the Reynolds number (m).
+    pub reference_length_m: f64,
+    /// How the time step is chosen: exactly one of these three.
+    #[serde(default)]
+    pub time_step_s: Option<f64>,
+    /// Lattice velocity of `reference_velocity_m_s` (u_lb = U Δt/Δx); sets Δt.
+    #[serde(default)]
+    pub lattice_velocity: Option<f64>,
+    /// Relaxation time τ = 3ν Δt/Δx² + ½; sets Δt.
+    #[serde(default)]
+    pub relaxation_time: Option<f64>,
+    /// Uniform body acceleration (m/s²), Guo forcing.
+    #[serde(default)]
+    pub body_acceleration_m_s2: [f64; 2],
+    /// Collision operator.
+    #[serde(default = "default_collision")]
+    pub collision: CollisionModel,
+    /// Smagorinsky constant C_s (typically 0.1–0.17); absent = no closure.
+    #[serde(default)]
+    pub smagorinsky_constant: Option<f64>,
+    /// Permit Mach ≥ 0.3 (compressibility errors grow as Ma²).
+    #[serde(default)]
+    pub allow_high_mach: bool,
+    /// Initial condition.
+    #[serde(default = "default_initial")]
+    pub initial: Initial,
+}
+
+fn default_collision() -> CollisionModel {
+    CollisionModel::Bgk
+}
+fn default_initial() -> Initial {
+    Initial::Rest
+}
+
+/// Collision operator choice.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "model", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum CollisionModel {
+    /// BGK.
+    Bgk,
+    /// TRT with Λ (default 3/16).
+    Trt {
+        /// Magic parameter Λ.
+        #[serde(default = "magic_default")]
+        magic: f64,
+    },
+    /// MRT (Lallemand & Luo 2000).
+    Mrt {
+        /// s_e (default 1.4).
+        #[serde(default = "mrt_default")]
+        s_e: f64,
+        /// s_ε (default 1.4).
+        #[serde(default = "mrt_default")]
+        s_eps: f64,
+        /// s_q; absent = derived for Λ = 3/16.
+        #[serde(default)]
+        s_q: Option<f64>,
+    },
+}
+
+fn magic_default() -> f64 {
+    3.0 / 16.0
+}
+fn mrt_default() -> f64 {
+    1.4
+}
+
+/// Initial condition of the fluid.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Initial {
+    /// ρ = ρ₀, u = 0.
+    Rest,
+    /// Uniform velocity (m/s).
+    Uniform {
+        /// Velocity.
+        velocity_m_s: [f64; 2],
+    },
+    /// Taylor–Green vortex u = U(−cos kx sin ky, sin kx cos ky) with one period across the
+    /// domain in each direction (Taylor & Green 1937); pressure set consistently.
+    TaylorGreen {
+        /// Amplitude U (m/s).
+        amplitude_m_s: f64,
+    },
+}
+
+/// Conditions on west (x = 0), east, south (y = 0) and north.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Boundaries {
+    /// x = 0.
+    pub west: BoundarySpec,
+    /// x = L_x.
+    pub east: BoundarySpec,
+    /// y = 0.
+    pub south: BoundarySpec,
+    /// y = L_y.
+    pub north: BoundarySpec,
+}
+
+/// One face's condition.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum BoundarySpec {
+    /// Wraps to the opposite face.
+    Periodic,
+    /// No-slip wall (half-way bounce-back).
+    Wall,
+    /// Wall moving tangentially (Ladd bounce-back).
+    MovingWall {
+        /// Wall velocity (m/s).
+        velocity_m_s: [f64; 2],
+    },
+    /// Free-slip (specular) wall.
+    FreeSlip,
+    /// Zero-gradient outflow.
+    Outflow,
+    /// Zou–He velocity inlet/outlet.
+    Velocity {
+        /// Velocity (m/s); for `parabolic`, the peak velocity.
+        velocity_m_s: [f64; 2],
+        /// Profile along the face.
+        #[serde(default)]
+        profile: Profile,
+    },
+    /// Zou–He pressure inlet/outlet.
+    Pressure {
+        /// Pressure relative to ρ₀ c_s² (Pa).
+        pressure_pa: f64,
+    },
+}
+
+/// Velocity profile along an inlet.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Profile {
+    /// Same velocity everywhere.
+    #[default]
+    Uniform,
+    /// u(s) = 4 U s (L − s)/L², zero at the face's ends.
+    Parabolic,
+}
+
+/// A named solid obstacle (geometry in metres), tagged by `shape`.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "shape", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Obstacle {
+    /// Axis-aligned rectangle.
+    Rectangle {
+        /// Name (unique); force probes refer to it.
+        name: String,
+        /// Lower-left corner (m).
+        min_m: [f64; 2],
+        /// Upper-right corner (m).
+        max_m: [f64; 2],
+    },
+    /// Disk.
+    Circle {
+        /// Name (unique).
+        name: String,
+        /// Centre (m).
+        centre_m: [f64; 2],
+        /// Radius (m).
+        radius_m: f64,
+    },
+    /// Polygon, vertices in order (m).
+    Polygon {
+        /// Name (unique).
+        name: String,
+        /// Vertices.
+        vertices_m: Vec<[f64; 2]>,
+    },
+    /// A PNG mask the size of the lattice (dark pixels are solid; top row is north).
+    Mask {
+        /// Name (unique).
+        name: String,
+        /// Path relative to the scene file.
+        image: String,
+    },
+}
+
+impl Obstacle {
+    /// The obstacle's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Obstacle::Rectangle { name, .. }
+            | Obstacle::Circle { name, .. }
+            | Obstacle::Polygon { name, .. }
+            | Obstacle::Mask { name, .. } => name,
+        }
+    }
+}
+
+/// Run length, precision and output.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Run {
+    /// Number of steps (exclusive with `end_time_s`).
+    #[serde(default)]
+    pub steps: Option<u64>,
+    /// Simulated time to reach (s).
+    #[serde(default)]
+    pub end_time_s: Option<f64>,
+    /// "f32" or "f64" (default f64); the CLI may override.
+    #[serde(default = "default_precision")]
+    pub precision: String,
+    /// Snapshot (HDF5 + PNG) every this many steps; 0 = only at the end.
+    #[serde(default)]
+    pub output_every: u64,
+    /// Fields in snapshots: any of "density", "velocity", "vorticity".
+    #[serde(default = "default_fields")]
+    pub fields: Vec<String>,
+    /// Write PNG pictures with each snapshot.
+    #[serde(default = "default_true")]
+    pub pictures: bool,
+    /// Record probes every this many steps.
+    #[serde(default = "default_one")]
+    pub probe_every: u64,
+}
+
+fn default_precision() -> String {
+    "f64".into()
+}
+fn default_fields() -> Vec<String> {
+    vec!["density".into(), "velocity".into(), "vorticity".into()]
+}
+fn default_true() -> bool {
+    true
+}
+fn default_one() -> u64 {
+    1
+}
+
+/// A time series recorded during the run.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Probe {
+    /// Velocity and pressure at a point (nearest cell centre).
+    Point {
+        /// Name (unique).
+        name: String,
+        /// Position (m).
+        position_m: [f64; 2],
+    },
+    /// Hydrodynamic force on an obstacle (momentum exchange), N per metre of depth.
+    Force {
+        /// Name (unique).
+        name: String,
+        /// Obstacle name.
+        obstacle: String,
+    },
+}
+
+impl Probe {
+    /// The probe's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Probe::Point { name, .. } | Probe::Force { name, .. } => name,
+        }
+    }
+}
+
+/// A derived quantity computed at the end of the run; its results are named
+/// `<kind-prefix>.<quantity>` (see each variant) and can be checked.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Analysis {
+    /// Body-force channel between walls on south and north:
+    /// `poiseuille.max_rel_error`, `poiseuille.l2_rel_error`, `poiseuille.centreline_velocity_m_s`.
+    Poiseuille,
+    /// Shear flow between a fixed south wall and a moving north wall: `couette.l2_rel_error`.
+    Couette,
+    /// Decay of the Taylor–Green vortex: `taylor_green.l2_rel_error`.
+    TaylorGreen,
+    /// Lid-driven cavity centrelines against tabulated data (Ghia et al. 1982):
+    /// `ghia.max_u_deviation`, `ghia.max_v_deviation` (fractions of the lid speed).
+    Ghia {
+        /// CSV of (y, u…) along the vertical centreline, relative to the scene file.
+        u_reference: String,
+        /// CSV of (x, v…) along the horizontal centreline.
+        v_reference: String,
+        /// Column of the CSVs to compare with.
+        column: String,
+    },
+    /// Drag and lift coefficients from a force probe, averaged over the last
+    /// `average_last_s`: `<probe>.drag_coefficient`, `<probe>.lift_coefficient`.
+    ForceCoefficients {
+        /// Force probe.
+        probe: String,
+        /// U in c = 2F/(ρ U² D) (m/s).
+        velocity_m_s: f64,
+        /// D (m).
+        length_m: f64,
+        /// Averaging window at the end of the run (s).
+        #[serde(default)]
+        average_last_s: f64,
+    },
+    /// Dominant frequency of a point probe's pressure after `skip_s` (FFT):
+    /// `<probe>.strouhal` = f D / U and `<probe>.relative_oscillation`
+    /// (peak-to-peak pressure over ½ρU², a shedding indicator).
+    Strouhal {
+        /// Point probe.
+        probe: String,
+        /// U (m/s).
+        velocity_m_s: f64,
+        /// D (m).
+        length_m: f64,
+        /// Transient to discard (s).
+        skip_s: f64,
+    },
+    /// Relative change of the total fluid mass over the run: `mass.relative_drift`.
+    MassDrift,
+}
+
+/// A pass/fail check on a named quantity. Give `max`, `min`, or `expected` with
+/// `tolerance` (absolute) or `relative_tolerance`.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Check {
+    /// Quantity name, e.g. `poiseuille.max_rel_error`.
+    pub quantity: String,
+    /// Reference value.
+    #[serde(default)]
+    pub expected: Option<f64>,
+    /// Allowed absolute deviation from `expected`.
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+    /// Allowed relative deviation from `expected`.
+    #[serde(default)]
+    pub relative_tolerance: Option<f64>,
+    /// Upper bound.
+    #[serde(default)]
+    pub max: Option<f64>,
+    /// Lower bound.
+    #[serde(default)]
+    pub min: Option<f64>,
+}
