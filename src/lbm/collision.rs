@@ -12,8 +12,51 @@
 //! |Π^neq| = √(Π^neq:Π^neq), the momentum-flux non-equilibrium. It follows from
 //! ν_t = (C Δ)² |S| with |S| = √(2 S:S) and S = −Π^neq/(2ρ c_s² τ).
 
-use super::d2q9::{CX, CY, OPP, Q, W};
+use super::d2q9::{CX, CY, Q, W};
 use super::real::Real;
+
+/// Expand `$body` once per direction with `$i` a compile-time constant, so every lattice
+/// constant folds and the row loop around the collision vectorises.
+macro_rules! for_each_dir {
+    ($i:ident => $body:block) => {{
+        {
+            const $i: usize = 0;
+            $body
+        }
+        {
+            const $i: usize = 1;
+            $body
+        }
+        {
+            const $i: usize = 2;
+            $body
+        }
+        {
+            const $i: usize = 3;
+            $body
+        }
+        {
+            const $i: usize = 4;
+            $body
+        }
+        {
+            const $i: usize = 5;
+            $body
+        }
+        {
+            const $i: usize = 6;
+            $body
+        }
+        {
+            const $i: usize = 7;
+            $body
+        }
+        {
+            const $i: usize = 8;
+            $body
+        }
+    }};
+}
 
 /// The collision model a scene picks.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,31 +94,56 @@ impl Collision {
 }
 
 /// Everything a collision needs, in lattice units and the kernel's precision.
+///
+/// All three operators run in the Lallemand–Luo moment space: BGK relaxes every
+/// non-conserved moment with ω = 1/τ; TRT relaxes the even moments (e, ε, p_xx, p_xy) with
+/// ω⁺ = 1/τ and the odd ones (q_x, q_y) with ω⁻ from Λ; MRT uses its own s_e, s_ε, s_q.
+/// That is algebraically identical to the population-space forms (see the tests) and
+/// gives one vectorising kernel for all three.
 #[derive(Debug, Clone, Copy)]
 pub struct CollisionParams<T> {
     /// Molecular relaxation time τ₀ = 3ν + ½.
     pub tau0: T,
-    /// TRT Λ.
+    /// Λ used to derive s_q from the shear rate.
     pub magic: T,
-    /// MRT rates (s_e, s_ε, s_q); s_q < 0 means "derive from s_ν".
+    /// s_e (resolved).
     pub s_e: T,
-    /// See `s_e`.
+    /// s_ε (resolved).
     pub s_eps: T,
-    /// See `s_e`.
+    /// s_ν = 1/τ₀.
+    pub s_nu: T,
+    /// s_q (resolved for τ₀).
     pub s_q: T,
+    /// Whether s_q follows the shear rate through Λ when the Smagorinsky closure changes it.
+    pub s_q_from_magic: bool,
     /// 18√2 C_s² (zero when the closure is off).
     pub smag_k: T,
     /// Body force density per cell, lattice units.
     pub force: [T; 2],
 }
 
+/// s_q such that (1/s_ν − ½)(1/s_q − ½) = Λ (Ginzburg 2005).
+#[inline(always)]
+fn odd_rate<T: Real>(s_nu: T, magic: T) -> T {
+    let half = T::from_f64(0.5);
+    T::from_f64(1.0) / (magic / (T::from_f64(1.0) / s_nu - half) + half)
+}
+
 impl<T: Real> CollisionParams<T> {
     /// Build from the physical choice. `smagorinsky` is the constant C_s, if enabled.
     pub fn new(model: Collision, tau0: f64, smagorinsky: Option<f64>, force: [f64; 2]) -> Self {
-        let (magic, s_e, s_eps, s_q) = match model {
-            Collision::Bgk => (0.25, 0.0, 0.0, -1.0),
-            Collision::Trt { magic } => (magic, 0.0, 0.0, -1.0),
-            Collision::Mrt { s_e, s_eps, s_q } => (3.0 / 16.0, s_e, s_eps, s_q.unwrap_or(-1.0)),
+        let w = 1.0 / tau0;
+        let magic_rate = |l: f64| 1.0 / (l / (tau0 - 0.5) + 0.5);
+        let (magic, s_e, s_eps, s_q, from_magic) = match model {
+            Collision::Bgk => ((tau0 - 0.5) * (tau0 - 0.5), w, w, w, true),
+            Collision::Trt { magic } => (magic, w, w, magic_rate(magic), true),
+            Collision::Mrt { s_e, s_eps, s_q } => (
+                3.0 / 16.0,
+                s_e,
+                s_eps,
+                s_q.unwrap_or(magic_rate(3.0 / 16.0)),
+                s_q.is_none(),
+            ),
         };
         let c = smagorinsky.unwrap_or(0.0);
         Self {
@@ -83,7 +151,9 @@ impl<T: Real> CollisionParams<T> {
             magic: T::from_f64(magic),
             s_e: T::from_f64(s_e),
             s_eps: T::from_f64(s_eps),
+            s_nu: T::from_f64(w),
             s_q: T::from_f64(s_q),
+            s_q_from_magic: from_magic,
             smag_k: T::from_f64(18.0 * std::f64::consts::SQRT_2 * c * c),
             force: [T::from_f64(force[0]), T::from_f64(force[1])],
         }
@@ -125,12 +195,29 @@ pub fn moments<T: Real>(h: &[T; Q], force: [T; 2]) -> Moments<T> {
 pub fn equilibrium<T: Real>(m: &Moments<T>) -> [T; Q] {
     let usq = m.ux * m.ux + m.uy * m.uy;
     let mut eq = [T::default(); Q];
-    for i in 0..Q {
-        let cu = T::from_f64(CX[i] as f64) * m.ux + T::from_f64(CY[i] as f64) * m.uy;
-        let poly = T::from_f64(3.0) * cu + T::from_f64(4.5) * cu * cu - T::from_f64(1.5) * usq;
-        eq[i] = T::from_f64(W[i]) * (m.drho + m.rho * poly);
-    }
+    let usq15 = T::from_f64(1.5) * usq;
+    for_each_dir!(I => {
+        let cu = dot::<T, I>(m.ux, m.uy);
+        let poly = T::from_f64(3.0) * cu + T::from_f64(4.5) * cu * cu - usq15;
+        eq[I] = T::from_f64(W[I]) * (m.drho + m.rho * poly);
+    });
     eq
+}
+
+/// c_I · (a, b) with the zero components dropped at compile time.
+#[inline(always)]
+fn dot<T: Real, const I: usize>(a: T, b: T) -> T {
+    match (CX[I], CY[I]) {
+        (0, 0) => T::default(),
+        (1, 0) => a,
+        (-1, 0) => -a,
+        (0, 1) => b,
+        (0, -1) => -b,
+        (1, 1) => a + b,
+        (-1, 1) => b - a,
+        (-1, -1) => -(a + b),
+        _ => a - b,
+    }
 }
 
 /// Smagorinsky relaxation time from the non-equilibrium momentum flux (Hou et al. 1996).
@@ -140,8 +227,8 @@ fn smagorinsky_tau<T: Real>(p: &CollisionParams<T>, pxx: T, pyy: T, pxy: T, rho:
     T::from_f64(0.5) * (p.tau0 + (p.tau0 * p.tau0 + p.smag_k * q / rho).sqrt())
 }
 
-/// Π^neq from the population deviations `h − h^eq`.
-#[inline(always)]
+/// Π^neq from the population deviations `h − h^eq` (test oracle for the moment form).
+#[cfg(test)]
 fn pi_neq<T: Real>(h: &[T; Q], eq: &[T; Q]) -> (T, T, T) {
     let d = |i: usize| h[i] - eq[i];
     let diag = d(5) + d(6) + d(7) + d(8);
@@ -152,88 +239,29 @@ fn pi_neq<T: Real>(h: &[T; Q], eq: &[T; Q]) -> (T, T, T) {
     )
 }
 
-/// A collision operator the row kernels can inline. `SMAG` switches the closure on.
+/// A collision operator the row kernels can inline.
 pub trait Collider<T: Real>: Sync {
     /// Collide the shifted populations of one cell in place; returns the cell's moments
     /// (pre-collision, Guo-corrected velocity).
     fn collide(&self, h: &mut [T; Q]) -> Moments<T>;
 }
 
-/// BGK with Guo forcing.
-pub struct Bgk<T, const SMAG: bool>(pub CollisionParams<T>);
-/// TRT with Guo forcing split into symmetric and antisymmetric parts.
-pub struct Trt<T, const SMAG: bool>(pub CollisionParams<T>);
-/// Lallemand–Luo MRT with Guo forcing in moment space.
-pub struct Mrt<T, const SMAG: bool>(pub CollisionParams<T>);
-
-/// Guo source term F_i = w_i [3(c_i − u) + 9 (c_i·u) c_i]·F, returned as (symmetric, antisymmetric) parts.
-#[inline(always)]
-fn guo_parts<T: Real>(i: usize, m: &Moments<T>, f: [T; 2]) -> (T, T) {
-    let cx = T::from_f64(CX[i] as f64);
-    let cy = T::from_f64(CY[i] as f64);
-    let w = T::from_f64(W[i]);
-    let cu = cx * m.ux + cy * m.uy;
-    let cf = cx * f[0] + cy * f[1];
-    let uf = m.ux * f[0] + m.uy * f[1];
-    (
-        w * (T::from_f64(9.0) * cu * cf - T::from_f64(3.0) * uf),
-        w * T::from_f64(3.0) * cf,
-    )
+/// Operator family for [`MomentCollider`]: how the rates follow the (possibly
+/// Smagorinsky-modified) shear rate.
+pub mod family {
+    /// Every rate equals s_ν.
+    pub const BGK: u8 = 0;
+    /// Even rates equal s_ν, s_q from Λ.
+    pub const TRT: u8 = 1;
+    /// s_e, s_ε fixed; s_q fixed or from Λ = 3/16.
+    pub const MRT: u8 = 2;
 }
 
-impl<T: Real, const SMAG: bool> Collider<T> for Bgk<T, SMAG> {
-    #[inline(always)]
-    fn collide(&self, h: &mut [T; Q]) -> Moments<T> {
-        let p = &self.0;
-        let m = moments(h, p.force);
-        let eq = equilibrium(&m);
-        let tau = if SMAG {
-            let (xx, yy, xy) = pi_neq(h, &eq);
-            smagorinsky_tau(p, xx, yy, xy, m.rho)
-        } else {
-            p.tau0
-        };
-        let omega = T::from_f64(1.0) / tau;
-        let fpre = T::from_f64(1.0) - T::from_f64(0.5) * omega;
-        for i in 0..Q {
-            let (s, a) = guo_parts(i, &m, p.force);
-            h[i] = h[i] - omega * (h[i] - eq[i]) + fpre * (s + a);
-        }
-        m
-    }
-}
+/// The moment-space collision of BGK, TRT and MRT, with Guo forcing in moment space and an
+/// optional Smagorinsky closure (`SMAG`). `FAMILY` is one of [`family`].
+pub struct MomentCollider<T, const SMAG: bool, const FAMILY: u8>(pub CollisionParams<T>);
 
-impl<T: Real, const SMAG: bool> Collider<T> for Trt<T, SMAG> {
-    #[inline(always)]
-    fn collide(&self, h: &mut [T; Q]) -> Moments<T> {
-        let p = &self.0;
-        let m = moments(h, p.force);
-        let eq = equilibrium(&m);
-        let tau = if SMAG {
-            let (xx, yy, xy) = pi_neq(h, &eq);
-            smagorinsky_tau(p, xx, yy, xy, m.rho)
-        } else {
-            p.tau0
-        };
-        let half = T::from_f64(0.5);
-        let one = T::from_f64(1.0);
-        let wp = one / tau;
-        // Λ = (τ⁺ − ½)(τ⁻ − ½) (Ginzburg 2005).
-        let wm = one / (p.magic / (tau - half) + half);
-        let (fp, fm) = (one - half * wp, one - half * wm);
-        let h_in = *h;
-        for i in 0..Q {
-            let o = OPP[i];
-            let (hp, hm) = (half * (h_in[i] + h_in[o]), half * (h_in[i] - h_in[o]));
-            let (ep, em) = (half * (eq[i] + eq[o]), half * (eq[i] - eq[o]));
-            let (s, a) = guo_parts(i, &m, p.force);
-            h[i] = h_in[i] - wp * (hp - ep) - wm * (hm - em) + fp * s + fm * a;
-        }
-        m
-    }
-}
-
-impl<T: Real, const SMAG: bool> Collider<T> for Mrt<T, SMAG> {
+impl<T: Real, const SMAG: bool, const FAMILY: u8> Collider<T> for MomentCollider<T, SMAG, FAMILY> {
     #[inline(always)]
     fn collide(&self, h: &mut [T; Q]) -> Moments<T> {
         let p = &self.0;
@@ -257,30 +285,40 @@ impl<T: Real, const SMAG: bool> Collider<T> for Mrt<T, SMAG> {
         let uy = (jy + c(0.5) * fy) * inv;
         let (rux, ruy) = (rho * ux, rho * uy);
         let ru2 = rux * ux + ruy * uy;
-        // Shifted equilibria (M w = (1, −2, 1, 0, …) removed).
+        // Shifted equilibria (M w = (1, −2, 1, 0, …) removed), Lallemand & Luo 2000, eq. 23.
         let e_eq = c(-2.0) * drho + c(3.0) * ru2;
         let eps_eq = drho - c(3.0) * ru2;
         let pxx_eq = rux * ux - ruy * uy;
         let pxy_eq = rux * uy;
-        let s_nu = if SMAG {
+        let (s_e, s_eps, s_nu, s_q) = if SMAG {
             // Π^neq from the moments: tr Π = (e + 4ρ)/3, Π_xx − Π_yy = p_xx, Π_xy = p_xy.
             let tr = (e - e_eq) * c(1.0 / 3.0);
             let dxx = pxx - pxx_eq;
             let dxy = pxy - pxy_eq;
-            c(1.0) / smagorinsky_tau(p, c(0.5) * (tr + dxx), c(0.5) * (tr - dxx), dxy, rho)
+            let s_nu =
+                c(1.0) / smagorinsky_tau(p, c(0.5) * (tr + dxx), c(0.5) * (tr - dxx), dxy, rho);
+            match FAMILY {
+                family::BGK => (s_nu, s_nu, s_nu, s_nu),
+                family::TRT => (s_nu, s_nu, s_nu, odd_rate(s_nu, p.magic)),
+                _ => (
+                    p.s_e,
+                    p.s_eps,
+                    s_nu,
+                    if p.s_q_from_magic {
+                        odd_rate(s_nu, p.magic)
+                    } else {
+                        p.s_q
+                    },
+                ),
+            }
         } else {
-            c(1.0) / p.tau0
+            (p.s_e, p.s_eps, p.s_nu, p.s_q)
         };
-        let s_q = if p.s_q < c(0.0) {
-            c(1.0) / (c(0.5) + c(3.0 / 16.0) / (c(1.0) / s_nu - c(0.5)))
-        } else {
-            p.s_q
-        };
-        // Guo source in moment space: M F_i.
+        // Guo source in moment space: M F_i (Guo, Zheng & Shi 2002; Lallemand & Luo 2000).
         let uf = ux * fx + uy * fy;
         let relax = |m: T, meq: T, s: T, src: T| m - s * (m - meq) + (c(1.0) - c(0.5) * s) * src;
-        let e = relax(e, e_eq, p.s_e, c(6.0) * uf);
-        let eps = relax(eps, eps_eq, p.s_eps, c(-6.0) * uf);
+        let e = relax(e, e_eq, s_e, c(6.0) * uf);
+        let eps = relax(eps, eps_eq, s_eps, c(-6.0) * uf);
         let qx = relax(qx, -rux, s_q, -fx);
         let qy = relax(qy, -ruy, s_q, -fy);
         let pxx = relax(pxx, pxx_eq, s_nu, c(2.0) * (ux * fx - uy * fy));
@@ -315,6 +353,7 @@ impl<T: Real, const SMAG: bool> Collider<T> for Mrt<T, SMAG> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lbm::d2q9::OPP;
 
     fn sample() -> [f64; Q] {
         [
@@ -322,53 +361,113 @@ mod tests {
         ]
     }
 
-    /// MRT with every rate equal to 1/τ must reduce to BGK, forcing included.
+    /// Reference BGK in population space with Guo forcing (Guo, Zheng & Shi 2002, eq. 20).
+    fn reference_bgk(h: &mut [f64; Q], tau: f64, f: [f64; 2]) {
+        let m = moments(h, f);
+        let eq = equilibrium(&m);
+        let w = 1.0 / tau;
+        for i in 0..Q {
+            let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+            let src = W[i]
+                * (3.0 * ((cx - m.ux) * f[0] + (cy - m.uy) * f[1])
+                    + 9.0 * (cx * m.ux + cy * m.uy) * (cx * f[0] + cy * f[1]));
+            h[i] += -w * (h[i] - eq[i]) + (1.0 - 0.5 * w) * src;
+        }
+    }
+
+    /// Reference TRT in population space (Ginzburg 2005), Guo source split by parity.
+    fn reference_trt(h: &mut [f64; Q], tau: f64, magic: f64, f: [f64; 2]) {
+        let m = moments(h, f);
+        let eq = equilibrium(&m);
+        let wp = 1.0 / tau;
+        let wm = 1.0 / (magic / (tau - 0.5) + 0.5);
+        let hin = *h;
+        for i in 0..Q {
+            let o = OPP[i];
+            let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+            let cu = cx * m.ux + cy * m.uy;
+            let cf = cx * f[0] + cy * f[1];
+            let uf = m.ux * f[0] + m.uy * f[1];
+            let (sp, sm) = (W[i] * (9.0 * cu * cf - 3.0 * uf), W[i] * 3.0 * cf);
+            h[i] = hin[i]
+                - wp * 0.5 * (hin[i] + hin[o] - eq[i] - eq[o])
+                - wm * 0.5 * (hin[i] - hin[o] - eq[i] + eq[o])
+                + (1.0 - 0.5 * wp) * sp
+                + (1.0 - 0.5 * wm) * sm;
+        }
+    }
+
     #[test]
-    fn mrt_with_equal_rates_is_bgk() {
-        let tau = 0.8;
-        let force = [1e-4, -2e-4];
-        let bgk = Bgk::<f64, false>(CollisionParams::new(Collision::Bgk, tau, None, force));
-        let mrt_model = Collision::Mrt {
-            s_e: 1.0 / tau,
-            s_eps: 1.0 / tau,
-            s_q: Some(1.0 / tau),
-        };
-        let mrt = Mrt::<f64, false>(CollisionParams::new(mrt_model, tau, None, force));
+    fn moment_space_bgk_matches_population_space() {
+        let (tau, force) = (0.8, [1e-4, -2e-4]);
         let (mut a, mut b) = (sample(), sample());
-        bgk.collide(&mut a);
-        mrt.collide(&mut b);
+        reference_bgk(&mut a, tau, force);
+        MomentCollider::<f64, false, { family::BGK }>(CollisionParams::new(
+            Collision::Bgk,
+            tau,
+            None,
+            force,
+        ))
+        .collide(&mut b);
         for i in 0..Q {
             assert!((a[i] - b[i]).abs() < 1e-15, "dir {i}: {} vs {}", a[i], b[i]);
         }
     }
 
-    /// TRT with Λ = (τ − ½)² has ω⁻ = ω⁺ and must reduce to BGK.
     #[test]
-    fn trt_with_equal_rates_is_bgk() {
-        let tau = 0.7;
-        let force = [3e-5, 1e-5];
-        let bgk = Bgk::<f64, false>(CollisionParams::new(Collision::Bgk, tau, None, force));
-        let trt = Trt::<f64, false>(CollisionParams::new(
-            Collision::Trt {
-                magic: (tau - 0.5) * (tau - 0.5),
-            },
+    fn moment_space_trt_matches_population_space() {
+        let (tau, magic, force) = (0.7, 3.0 / 16.0, [3e-5, 1e-5]);
+        let (mut a, mut b) = (sample(), sample());
+        reference_trt(&mut a, tau, magic, force);
+        MomentCollider::<f64, false, { family::TRT }>(CollisionParams::new(
+            Collision::Trt { magic },
             tau,
             None,
             force,
-        ));
+        ))
+        .collide(&mut b);
+        for i in 0..Q {
+            assert!((a[i] - b[i]).abs() < 1e-15, "dir {i}: {} vs {}", a[i], b[i]);
+        }
+    }
+
+    /// MRT with every rate 1/τ is BGK.
+    #[test]
+    fn mrt_with_equal_rates_is_bgk() {
+        let (tau, force) = (0.9, [2e-5, 4e-5]);
         let (mut a, mut b) = (sample(), sample());
-        bgk.collide(&mut a);
-        trt.collide(&mut b);
+        reference_bgk(&mut a, tau, force);
+        let model = Collision::Mrt {
+            s_e: 1.0 / tau,
+            s_eps: 1.0 / tau,
+            s_q: Some(1.0 / tau),
+        };
+        MomentCollider::<f64, false, { family::MRT }>(CollisionParams::new(
+            model, tau, None, force,
+        ))
+        .collide(&mut b);
         for i in 0..Q {
             assert!((a[i] - b[i]).abs() < 1e-15);
         }
+    }
+
+    fn collide_any(model: Collision, smag: bool, p: CollisionParams<f64>, h: &mut [f64; Q]) {
+        use family::*;
+        match (model, smag) {
+            (Collision::Bgk, false) => MomentCollider::<_, false, BGK>(p).collide(h),
+            (Collision::Bgk, true) => MomentCollider::<_, true, BGK>(p).collide(h),
+            (Collision::Trt { .. }, false) => MomentCollider::<_, false, TRT>(p).collide(h),
+            (Collision::Trt { .. }, true) => MomentCollider::<_, true, TRT>(p).collide(h),
+            (Collision::Mrt { .. }, false) => MomentCollider::<_, false, MRT>(p).collide(h),
+            (Collision::Mrt { .. }, true) => MomentCollider::<_, true, MRT>(p).collide(h),
+        };
     }
 
     /// Every operator conserves mass and adds exactly F to the momentum (Guo 2002).
     #[test]
     fn conservation_and_momentum_source() {
         let force = [2e-5, -1e-5];
-        let models = [
+        for model in [
             Collision::Bgk,
             Collision::Trt { magic: 3.0 / 16.0 },
             Collision::Mrt {
@@ -376,20 +475,12 @@ mod tests {
                 s_eps: 1.1,
                 s_q: None,
             },
-        ];
-        for model in models {
+        ] {
             for smag in [None, Some(0.16)] {
                 let p = CollisionParams::<f64>::new(model, 0.56, smag, force);
                 let mut h = sample();
                 let before = moments(&h, [0.0, 0.0]);
-                match (model, smag.is_some()) {
-                    (Collision::Bgk, false) => Bgk::<_, false>(p).collide(&mut h),
-                    (Collision::Bgk, true) => Bgk::<_, true>(p).collide(&mut h),
-                    (Collision::Trt { .. }, false) => Trt::<_, false>(p).collide(&mut h),
-                    (Collision::Trt { .. }, true) => Trt::<_, true>(p).collide(&mut h),
-                    (Collision::Mrt { .. }, false) => Mrt::<_, false>(p).collide(&mut h),
-                    (Collision::Mrt { .. }, true) => Mrt::<_, true>(p).collide(&mut h),
-                };
+                collide_any(model, smag.is_some(), p, &mut h);
                 let after = moments(&h, [0.0, 0.0]);
                 assert!((after.drho - before.drho).abs() < 1e-16, "{model:?} mass");
                 let jb = [before.ux * before.rho, before.uy * before.rho];
@@ -406,6 +497,19 @@ mod tests {
         }
     }
 
+    /// The Smagorinsky closure raises τ where the strain is large and leaves equilibrium alone.
+    #[test]
+    fn smagorinsky_raises_tau_only_off_equilibrium() {
+        let p = CollisionParams::<f64>::new(Collision::Bgk, 0.51, Some(0.17), [0.0, 0.0]);
+        let h = sample();
+        let m = moments(&h, [0.0; 2]);
+        let eq = equilibrium(&m);
+        let (xx, yy, xy) = pi_neq(&h, &eq);
+        assert!(smagorinsky_tau(&p, xx, yy, xy, m.rho) > 0.51 + 1e-3);
+        let (xx, yy, xy) = pi_neq(&eq, &eq);
+        assert!((smagorinsky_tau(&p, xx, yy, xy, m.rho) - 0.51).abs() < 1e-15);
+    }
+
     /// The equilibrium is a fixed point of every operator without force.
     #[test]
     fn equilibrium_is_fixed_point() {
@@ -416,20 +520,25 @@ mod tests {
             uy: -0.02,
         };
         let eq = equilibrium(&m);
-        let p = CollisionParams::<f64>::new(
+        for model in [
+            Collision::Bgk,
+            Collision::Trt { magic: 0.25 },
             Collision::Mrt {
                 s_e: 1.2,
                 s_eps: 1.5,
                 s_q: None,
             },
-            0.6,
-            Some(0.17),
-            [0.0, 0.0],
-        );
-        let mut h = eq;
-        Mrt::<_, true>(p).collide(&mut h);
-        for i in 0..Q {
-            assert!((h[i] - eq[i]).abs() < 1e-15);
+        ] {
+            let mut h = eq;
+            collide_any(
+                model,
+                true,
+                CollisionParams::<f64>::new(model, 0.6, Some(0.17), [0.0, 0.0]),
+                &mut h,
+            );
+            for i in 0..Q {
+                assert!((h[i] - eq[i]).abs() < 1e-15);
+            }
         }
     }
 }

@@ -1,6 +1,6 @@
 //! The fused pull stream–collide sweep (CPU, rayon): one parallel pass over rows per step.
 
-use super::collision::{Bgk, Collider, Collision, Mrt, Trt};
+use super::collision::{family, Collider, Collision, MomentCollider};
 use super::d2q9::{CX, CY, Q};
 use super::lattice::{Lattice, StepError};
 use super::real::Real;
@@ -34,13 +34,14 @@ impl<T: Real> Lattice<T> {
             self.fill_halo();
         }
         let p = self.params;
+        use family::{BGK, MRT, TRT};
         match (self.collision, self.smagorinsky) {
-            (Collision::Bgk, false) => self.sweep(&Bgk::<T, false>(p)),
-            (Collision::Bgk, true) => self.sweep(&Bgk::<T, true>(p)),
-            (Collision::Trt { .. }, false) => self.sweep(&Trt::<T, false>(p)),
-            (Collision::Trt { .. }, true) => self.sweep(&Trt::<T, true>(p)),
-            (Collision::Mrt { .. }, false) => self.sweep(&Mrt::<T, false>(p)),
-            (Collision::Mrt { .. }, true) => self.sweep(&Mrt::<T, true>(p)),
+            (Collision::Bgk, false) => self.sweep(&MomentCollider::<T, false, BGK>(p)),
+            (Collision::Bgk, true) => self.sweep(&MomentCollider::<T, true, BGK>(p)),
+            (Collision::Trt { .. }, false) => self.sweep(&MomentCollider::<T, false, TRT>(p)),
+            (Collision::Trt { .. }, true) => self.sweep(&MomentCollider::<T, true, TRT>(p)),
+            (Collision::Mrt { .. }, false) => self.sweep(&MomentCollider::<T, false, MRT>(p)),
+            (Collision::Mrt { .. }, true) => self.sweep(&MomentCollider::<T, true, MRT>(p)),
         }
         if let Some(y) = self.row_bad.iter().position(|&b| b != 0) {
             return Err(self.locate_instability(y));
