@@ -81,7 +81,7 @@ mod tests {
         c1.expected = Some(0.141);
         c1.tolerance = Some(0.002);
         let mut c2 = check("a");
-        c2.expected = Some(0.15);
+        c2.expected = Some(0.145); // |0.14 − 0.145| = 0.005 ≤ 5 % of 0.145
         c2.relative_tolerance = Some(0.05);
         let mut c3 = check("a");
         c3.max = Some(0.1);
