@@ -43,6 +43,8 @@ pub struct Simulation<T: Real> {
     /// Recorded probe series, in scene order.
     pub series: Vec<Series>,
     targets: Vec<ProbeTarget>,
+    /// Longest inlet ramp (s); 0 when none.
+    ramp_s: f64,
     /// Stage timers.
     pub times: StageTimes,
 }
@@ -112,13 +114,37 @@ impl<T: Real> Simulation<T> {
             }
         }
         lattice.update_boundaries();
-        Ok(Self {
+        let b = &scene.scene.boundaries;
+        let ramp_s = [&b.west, &b.east, &b.south, &b.north]
+            .iter()
+            .map(|f| match f {
+                crate::scene::BoundarySpec::Velocity { ramp_time_s, .. } => *ramp_time_s,
+                _ => 0.0,
+            })
+            .fold(0.0, f64::max);
+        let mut sim = Self {
             lattice,
             units,
             series,
             targets,
+            ramp_s,
             times: StageTimes::default(),
-        })
+        };
+        sim.apply_ramp();
+        Ok(sim)
+    }
+
+    /// Inlet factor sin²(π t / 2T) for t < T, for the step about to be taken.
+    fn apply_ramp(&mut self) {
+        if self.ramp_s > 0.0 {
+            let t = self.units.time_si(self.lattice.steps_done() + 1);
+            let r = if t >= self.ramp_s {
+                1.0
+            } else {
+                (0.5 * std::f64::consts::PI * t / self.ramp_s).sin().powi(2)
+            };
+            self.lattice.set_inlet_scale(r);
+        }
     }
 
     /// The fluid stages of one step: collide–stream (with bounce-back and Zou–He links),
@@ -127,6 +153,7 @@ impl<T: Real> Simulation<T> {
         let lat = &mut self.lattice;
         self.times.time(0, || lat.stream_collide())?;
         self.times.time(1, || lat.update_boundaries());
+        self.apply_ramp();
         Ok(())
     }
 

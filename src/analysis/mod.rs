@@ -107,10 +107,19 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
             )?,
             Analysis::Strouhal {
                 probe,
+                signal,
                 velocity_m_s,
                 length_m,
                 skip_s,
-            } => signals::strouhal(inp, probe, *velocity_m_s, *length_m, *skip_s, &mut r)?,
+            } => signals::strouhal(
+                inp,
+                probe,
+                signal,
+                *velocity_m_s,
+                *length_m,
+                *skip_s,
+                &mut r,
+            )?,
             Analysis::MassDrift => {
                 let (a, b) = (inp.totals.0.mass, inp.totals.1.mass);
                 r.insert("mass.relative_drift".into(), (b - a) / a);

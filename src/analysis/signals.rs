@@ -38,20 +38,26 @@ pub fn force_coefficients(
     Ok(())
 }
 
-/// Dominant frequency of the pressure at a point probe after `skip_s`, by FFT of the
+/// Dominant frequency of a point probe's pressure or transverse velocity after `skip_s`, by FFT of the
 /// Hann-windowed, mean-removed signal with parabolic peak refinement; St = f D / U.
 pub fn strouhal(
     inp: &Inputs,
     probe: &str,
+    signal: &str,
     u: f64,
     d: f64,
     skip_s: f64,
     r: &mut Results,
 ) -> Result<(), AnalysisError> {
     let s = find(inp, probe, "strouhal")?;
+    let column = if signal == "uy" {
+        "uy_m_s"
+    } else {
+        "pressure_pa"
+    };
     let c = s
-        .column_index("pressure_pa")
-        .expect("point probes record pressure");
+        .column_index(column)
+        .expect("point probes record pressure and velocity");
     let p: Vec<f64> = (0..s.len())
         .filter(|&i| s.times[i] >= skip_s)
         .map(|i| s.values[i * s.columns.len() + c])
@@ -77,7 +83,11 @@ pub fn strouhal(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    let q = 0.5 * inp.scene.scene.fluid.density_kg_m3 * u * u;
+    let q = if signal == "uy" {
+        u
+    } else {
+        0.5 * inp.scene.scene.fluid.density_kg_m3 * u * u
+    };
     r.insert(format!("{probe}.strouhal"), f * d / u);
     r.insert(format!("{probe}.relative_oscillation"), (hi - lo) / q);
     Ok(())

@@ -132,7 +132,9 @@ impl<T: Real> Lattice<T> {
     /// Prescribed velocity of an open face at position `s` along it (zero for pressure faces).
     fn face_velocity(&self, face: Face, s: usize) -> Option<[f64; 2]> {
         match &self.faces[face as usize] {
-            FaceCondition::Velocity(v) => Some(v[s]),
+            FaceCondition::Velocity(v) => {
+                Some([v[s][0] * self.inlet_scale, v[s][1] * self.inlet_scale])
+            }
             _ => None,
         }
     }
@@ -146,7 +148,7 @@ impl<T: Real> Lattice<T> {
         let known = f[0] + f[r(2)] + f[r(4)] + 2.0 * (f[r(3)] + f[r(6)] + f[r(7)]);
         let (rho, un, ut) = match &self.faces[face as usize] {
             FaceCondition::Velocity(v) => {
-                let u = v[s];
+                let u = [v[s][0] * self.inlet_scale, v[s][1] * self.inlet_scale];
                 let un = CX[n] as f64 * u[0] + CY[n] as f64 * u[1];
                 let ut = CX[t] as f64 * u[0] + CY[t] as f64 * u[1];
                 // ρ = [f0 + f2 + f4 + 2(f3 + f6 + f7)] / (1 − u_n) (Zou & He 1997, eq. 19).

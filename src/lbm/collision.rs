@@ -13,6 +13,7 @@
 //! ν_t = (C Δ)² |S| with |S| = √(2 S:S) and S = −Π^neq/(2ρ c_s² τ).
 
 use super::d2q9::{CX, CY, Q, W};
+use super::lanes::Simd;
 use super::real::Real;
 
 /// Expand `$body` once per direction with `$i` a compile-time constant, so every lattice
@@ -114,8 +115,8 @@ pub struct CollisionParams<T> {
     pub s_nu: T,
     /// s_q (resolved for τ₀).
     pub s_q: T,
-    /// Whether s_q follows the shear rate through Λ when the Smagorinsky closure changes it.
-    pub s_q_from_magic: bool,
+    /// 1 when s_q follows the shear rate through Λ as the Smagorinsky closure changes it, else 0.
+    pub s_q_magic_weight: T,
     /// 18√2 C_s² (zero when the closure is off).
     pub smag_k: T,
     /// Body force density per cell, lattice units.
@@ -124,9 +125,10 @@ pub struct CollisionParams<T> {
 
 /// s_q such that (1/s_ν − ½)(1/s_q − ½) = Λ (Ginzburg 2005).
 #[inline(always)]
-fn odd_rate<T: Real>(s_nu: T, magic: T) -> T {
-    let half = T::from_f64(0.5);
-    T::from_f64(1.0) / (magic / (T::from_f64(1.0) / s_nu - half) + half)
+fn odd_rate<V: Simd>(s_nu: V, magic: V) -> V {
+    let half = V::splat(<V::Scalar as Real>::from_f64(0.5));
+    let one = V::splat(<V::Scalar as Real>::from_f64(1.0));
+    one / (magic / (one / s_nu - half) + half)
 }
 
 impl<T: Real> CollisionParams<T> {
@@ -153,7 +155,7 @@ impl<T: Real> CollisionParams<T> {
             s_eps: T::from_f64(s_eps),
             s_nu: T::from_f64(w),
             s_q: T::from_f64(s_q),
-            s_q_from_magic: from_magic,
+            s_q_magic_weight: T::from_f64(if from_magic { 1.0 } else { 0.0 }),
             smag_k: T::from_f64(18.0 * std::f64::consts::SQRT_2 * c * c),
             force: [T::from_f64(force[0]), T::from_f64(force[1])],
         }
@@ -222,9 +224,16 @@ fn dot<T: Real, const I: usize>(a: T, b: T) -> T {
 
 /// Smagorinsky relaxation time from the non-equilibrium momentum flux (Hou et al. 1996).
 #[inline(always)]
-fn smagorinsky_tau<T: Real>(p: &CollisionParams<T>, pxx: T, pyy: T, pxy: T, rho: T) -> T {
-    let q = (pxx * pxx + pyy * pyy + T::from_f64(2.0) * pxy * pxy).sqrt();
-    T::from_f64(0.5) * (p.tau0 + (p.tau0 * p.tau0 + p.smag_k * q / rho).sqrt())
+fn smagorinsky_tau<T: Real, V: Simd<Scalar = T>>(
+    p: &CollisionParams<T>,
+    pxx: V,
+    pyy: V,
+    pxy: V,
+    rho: V,
+) -> V {
+    let s = V::splat;
+    let q = (pxx * pxx + pyy * pyy + s(T::from_f64(2.0)) * pxy * pxy).sqrt();
+    s(T::from_f64(0.5)) * (s(p.tau0) + (s(p.tau0 * p.tau0) + s(p.smag_k) * q / rho).sqrt())
 }
 
 /// Π^neq from the population deviations `h − h^eq` (test oracle for the moment form).
@@ -241,9 +250,9 @@ fn pi_neq<T: Real>(h: &[T; Q], eq: &[T; Q]) -> (T, T, T) {
 
 /// A collision operator the row kernels can inline.
 pub trait Collider<T: Real>: Sync {
-    /// Collide the shifted populations of one cell in place; returns the cell's moments
-    /// (pre-collision, Guo-corrected velocity).
-    fn collide(&self, h: &mut [T; Q]) -> Moments<T>;
+    /// Collide the shifted populations of one cell (or one bundle of lanes) in place;
+    /// returns the pre-collision moments (Guo-corrected velocity).
+    fn collide<V: Simd<Scalar = T>>(&self, h: &mut [V; Q]) -> Moments<V>;
 }
 
 /// Operator family for [`MomentCollider`]: how the rates follow the (possibly
@@ -259,13 +268,20 @@ pub mod family {
 
 /// The moment-space collision of BGK, TRT and MRT, with Guo forcing in moment space and an
 /// optional Smagorinsky closure (`SMAG`). `FAMILY` is one of [`family`].
-pub struct MomentCollider<T, const SMAG: bool, const FAMILY: u8>(pub CollisionParams<T>);
+///
+/// `FORCED = false` drops the Guo terms at compile time (scenes without body force).
+pub struct MomentCollider<T, const SMAG: bool, const FAMILY: u8, const FORCED: bool>(
+    pub CollisionParams<T>,
+);
 
-impl<T: Real, const SMAG: bool, const FAMILY: u8> Collider<T> for MomentCollider<T, SMAG, FAMILY> {
+impl<T: Real, const SMAG: bool, const FAMILY: u8, const FORCED: bool> Collider<T>
+    for MomentCollider<T, SMAG, FAMILY, FORCED>
+{
     #[inline(always)]
-    fn collide(&self, h: &mut [T; Q]) -> Moments<T> {
+    fn collide<V: Simd<Scalar = T>>(&self, h: &mut [V; Q]) -> Moments<V> {
         let p = &self.0;
-        let c = |v: f64| T::from_f64(v);
+        let c = |v: f64| V::splat(T::from_f64(v));
+        let sp = V::splat;
         // Moments of the shifted populations (Lallemand & Luo 2000, eq. 11 basis).
         let s1 = h[1] + h[2] + h[3] + h[4];
         let s2 = h[5] + h[6] + h[7] + h[8];
@@ -280,10 +296,17 @@ impl<T: Real, const SMAG: bool, const FAMILY: u8> Collider<T> for MomentCollider
         let pxy = h[5] - h[6] + h[7] - h[8];
         let rho = c(1.0) + drho;
         let inv = c(1.0) / rho;
-        let (fx, fy) = (p.force[0], p.force[1]);
-        let ux = (jx + c(0.5) * fx) * inv;
-        let uy = (jy + c(0.5) * fy) * inv;
-        let (rux, ruy) = (rho * ux, rho * uy);
+        let (fx, fy) = (sp(p.force[0]), sp(p.force[1]));
+        let (ux, uy) = if FORCED {
+            ((jx + c(0.5) * fx) * inv, (jy + c(0.5) * fy) * inv)
+        } else {
+            (jx * inv, jy * inv)
+        };
+        let (rux, ruy) = if FORCED {
+            (rho * ux, rho * uy)
+        } else {
+            (jx, jy)
+        };
         let ru2 = rux * ux + ruy * uy;
         // Shifted equilibria (M w = (1, −2, 1, 0, …) removed), Lallemand & Luo 2000, eq. 23.
         let e_eq = c(-2.0) * drho + c(3.0) * ru2;
@@ -299,32 +322,49 @@ impl<T: Real, const SMAG: bool, const FAMILY: u8> Collider<T> for MomentCollider
                 c(1.0) / smagorinsky_tau(p, c(0.5) * (tr + dxx), c(0.5) * (tr - dxx), dxy, rho);
             match FAMILY {
                 family::BGK => (s_nu, s_nu, s_nu, s_nu),
-                family::TRT => (s_nu, s_nu, s_nu, odd_rate(s_nu, p.magic)),
-                _ => (
-                    p.s_e,
-                    p.s_eps,
-                    s_nu,
-                    if p.s_q_from_magic {
-                        odd_rate(s_nu, p.magic)
-                    } else {
-                        p.s_q
-                    },
-                ),
+                family::TRT => (s_nu, s_nu, s_nu, odd_rate(s_nu, sp(p.magic))),
+                // Blend instead of branching so the row loop still vectorises.
+                _ => {
+                    let w = sp(p.s_q_magic_weight);
+                    (
+                        sp(p.s_e),
+                        sp(p.s_eps),
+                        s_nu,
+                        w * odd_rate(s_nu, sp(p.magic)) + (c(1.0) - w) * sp(p.s_q),
+                    )
+                }
             }
         } else {
-            (p.s_e, p.s_eps, p.s_nu, p.s_q)
+            (sp(p.s_e), sp(p.s_eps), sp(p.s_nu), sp(p.s_q))
         };
-        // Guo source in moment space: M F_i (Guo, Zheng & Shi 2002; Lallemand & Luo 2000).
-        let uf = ux * fx + uy * fy;
-        let relax = |m: T, meq: T, s: T, src: T| m - s * (m - meq) + (c(1.0) - c(0.5) * s) * src;
-        let e = relax(e, e_eq, s_e, c(6.0) * uf);
-        let eps = relax(eps, eps_eq, s_eps, c(-6.0) * uf);
-        let qx = relax(qx, -rux, s_q, -fx);
-        let qy = relax(qy, -ruy, s_q, -fy);
-        let pxx = relax(pxx, pxx_eq, s_nu, c(2.0) * (ux * fx - uy * fy));
-        let pxy = relax(pxy, pxy_eq, s_nu, ux * fy + uy * fx);
-        let jx = jx + fx;
-        let jy = jy + fy;
+        let (e, eps, qx, qy, pxx, pxy, jx, jy) = if FORCED {
+            // Guo source in moment space: M F_i (Guo, Zheng & Shi 2002; Lallemand & Luo 2000).
+            let uf = ux * fx + uy * fy;
+            let relax =
+                |m: V, meq: V, s: V, src: V| m - s * (m - meq) + (c(1.0) - c(0.5) * s) * src;
+            (
+                relax(e, e_eq, s_e, c(6.0) * uf),
+                relax(eps, eps_eq, s_eps, c(-6.0) * uf),
+                relax(qx, -rux, s_q, -fx),
+                relax(qy, -ruy, s_q, -fy),
+                relax(pxx, pxx_eq, s_nu, c(2.0) * (ux * fx - uy * fy)),
+                relax(pxy, pxy_eq, s_nu, ux * fy + uy * fx),
+                jx + fx,
+                jy + fy,
+            )
+        } else {
+            let relax = |m: V, meq: V, s: V| m - s * (m - meq);
+            (
+                relax(e, e_eq, s_e),
+                relax(eps, eps_eq, s_eps),
+                relax(qx, -rux, s_q),
+                relax(qy, -ruy, s_q),
+                relax(pxx, pxx_eq, s_nu),
+                relax(pxy, pxy_eq, s_nu),
+                jx,
+                jy,
+            )
+        };
         // Back to populations: h = Mᵀ D⁻¹ m with D = diag(9, 36, 36, 6, 12, 6, 12, 4, 4).
         let a0 = drho * c(1.0 / 9.0);
         let a1 = e * c(1.0 / 36.0);
@@ -402,7 +442,7 @@ mod tests {
         let (tau, force) = (0.8, [1e-4, -2e-4]);
         let (mut a, mut b) = (sample(), sample());
         reference_bgk(&mut a, tau, force);
-        MomentCollider::<f64, false, { family::BGK }>(CollisionParams::new(
+        MomentCollider::<f64, false, { family::BGK }, true>(CollisionParams::new(
             Collision::Bgk,
             tau,
             None,
@@ -419,7 +459,7 @@ mod tests {
         let (tau, magic, force) = (0.7, 3.0 / 16.0, [3e-5, 1e-5]);
         let (mut a, mut b) = (sample(), sample());
         reference_trt(&mut a, tau, magic, force);
-        MomentCollider::<f64, false, { family::TRT }>(CollisionParams::new(
+        MomentCollider::<f64, false, { family::TRT }, true>(CollisionParams::new(
             Collision::Trt { magic },
             tau,
             None,
@@ -442,7 +482,7 @@ mod tests {
             s_eps: 1.0 / tau,
             s_q: Some(1.0 / tau),
         };
-        MomentCollider::<f64, false, { family::MRT }>(CollisionParams::new(
+        MomentCollider::<f64, false, { family::MRT }, true>(CollisionParams::new(
             model, tau, None, force,
         ))
         .collide(&mut b);
@@ -454,12 +494,12 @@ mod tests {
     fn collide_any(model: Collision, smag: bool, p: CollisionParams<f64>, h: &mut [f64; Q]) {
         use family::*;
         match (model, smag) {
-            (Collision::Bgk, false) => MomentCollider::<_, false, BGK>(p).collide(h),
-            (Collision::Bgk, true) => MomentCollider::<_, true, BGK>(p).collide(h),
-            (Collision::Trt { .. }, false) => MomentCollider::<_, false, TRT>(p).collide(h),
-            (Collision::Trt { .. }, true) => MomentCollider::<_, true, TRT>(p).collide(h),
-            (Collision::Mrt { .. }, false) => MomentCollider::<_, false, MRT>(p).collide(h),
-            (Collision::Mrt { .. }, true) => MomentCollider::<_, true, MRT>(p).collide(h),
+            (Collision::Bgk, false) => MomentCollider::<_, false, BGK, true>(p).collide(h),
+            (Collision::Bgk, true) => MomentCollider::<_, true, BGK, true>(p).collide(h),
+            (Collision::Trt { .. }, false) => MomentCollider::<_, false, TRT, true>(p).collide(h),
+            (Collision::Trt { .. }, true) => MomentCollider::<_, true, TRT, true>(p).collide(h),
+            (Collision::Mrt { .. }, false) => MomentCollider::<_, false, MRT, true>(p).collide(h),
+            (Collision::Mrt { .. }, true) => MomentCollider::<_, true, MRT, true>(p).collide(h),
         };
     }
 

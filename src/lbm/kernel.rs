@@ -2,6 +2,7 @@
 
 use super::collision::{family, Collider, Collision, MomentCollider};
 use super::d2q9::{CX, CY, Q};
+use super::lanes::{Lanes, LANES};
 use super::lattice::{Lattice, StepError};
 use super::real::Real;
 use rayon::prelude::*;
@@ -34,14 +35,21 @@ impl<T: Real> Lattice<T> {
             self.fill_halo();
         }
         let p = self.params;
-        use family::{BGK, MRT, TRT};
-        match (self.collision, self.smagorinsky) {
-            (Collision::Bgk, false) => self.sweep(&MomentCollider::<T, false, BGK>(p)),
-            (Collision::Bgk, true) => self.sweep(&MomentCollider::<T, true, BGK>(p)),
-            (Collision::Trt { .. }, false) => self.sweep(&MomentCollider::<T, false, TRT>(p)),
-            (Collision::Trt { .. }, true) => self.sweep(&MomentCollider::<T, true, TRT>(p)),
-            (Collision::Mrt { .. }, false) => self.sweep(&MomentCollider::<T, false, MRT>(p)),
-            (Collision::Mrt { .. }, true) => self.sweep(&MomentCollider::<T, true, MRT>(p)),
+        let forced = p.force[0] != T::default() || p.force[1] != T::default();
+        macro_rules! dispatch {
+            ($fam:expr) => {
+                match (self.smagorinsky, forced) {
+                    (false, false) => self.sweep(&MomentCollider::<T, false, { $fam }, false>(p)),
+                    (false, true) => self.sweep(&MomentCollider::<T, false, { $fam }, true>(p)),
+                    (true, false) => self.sweep(&MomentCollider::<T, true, { $fam }, false>(p)),
+                    (true, true) => self.sweep(&MomentCollider::<T, true, { $fam }, true>(p)),
+                }
+            };
+        }
+        match self.collision {
+            Collision::Bgk => dispatch!(family::BGK),
+            Collision::Trt { .. } => dispatch!(family::TRT),
+            Collision::Mrt { .. } => dispatch!(family::MRT),
         }
         if let Some(y) = self.row_bad.iter().position(|&b| b != 0) {
             return Err(self.locate_instability(y));
@@ -146,8 +154,8 @@ impl<T: Real> Lattice<T> {
     }
 }
 
-/// Stream–collide the bulk cells `[x0, x1)` of padded row `yp`. Returns true if any cell's
-/// density went NaN or non-positive.
+/// Stream–collide the bulk cells `[x0, x1)` of padded row `yp`, [`LANES`] cells at a time
+/// (scalar for the remainder). Returns true if any cell's density went NaN or non-positive.
 ///
 /// # Safety
 /// `dst` must point to a buffer of the same layout as `src`, and no other thread may touch
@@ -166,35 +174,41 @@ unsafe fn bulk_run<T: Real, C: Collider<T>>(
 ) -> bool {
     let n = x1 - x0;
     // Pull: population i at x comes from x − c_i.
-    let s = |i: usize| {
+    let s: [&[T]; Q] = std::array::from_fn(|i| {
         let start = i * plane
             + (yp as isize - CY[i] as isize) as usize * stride
             + (x0 as isize + 1 - CX[i] as isize) as usize;
         &src[start..start + n]
-    };
-    let d =
-        |i: usize| std::slice::from_raw_parts_mut(dst.0.add(i * plane + yp * stride + x0 + 1), n);
-    let (s0, s1, s2, s3, s4, s5, s6, s7, s8) =
-        (s(0), s(1), s(2), s(3), s(4), s(5), s(6), s(7), s(8));
-    let (d0, d1, d2, d3, d4, d5, d6, d7, d8) =
-        (d(0), d(1), d(2), d(3), d(4), d(5), d(6), d(7), d(8));
+    });
+    let d: [*mut T; Q] = std::array::from_fn(|i| dst.0.add(i * plane + yp * stride + x0 + 1));
     let zero = T::default();
-    let mut bad = 0u32;
-    for k in 0..n {
-        let mut h = [
-            s0[k], s1[k], s2[k], s3[k], s4[k], s5[k], s6[k], s7[k], s8[k],
-        ];
+    let mut bad = false;
+    let mut k = 0;
+    while k + LANES <= n {
+        let mut h: [Lanes<T, LANES>; Q] = std::array::from_fn(|i| {
+            let mut v = [zero; LANES];
+            v.copy_from_slice(&s[i][k..k + LANES]);
+            Lanes(v)
+        });
         let m = c.collide(&mut h);
-        d0[k] = h[0];
-        d1[k] = h[1];
-        d2[k] = h[2];
-        d3[k] = h[3];
-        d4[k] = h[4];
-        d5[k] = h[5];
-        d6[k] = h[6];
-        d7[k] = h[7];
-        d8[k] = h[8];
-        bad |= (!(m.rho > zero)) as u32;
+        for i in 0..Q {
+            std::ptr::copy_nonoverlapping(h[i].0.as_ptr(), d[i].add(k), LANES);
+        }
+        let mut lane_bad = false;
+        for r in m.rho.0 {
+            lane_bad |= !(r > zero);
+        }
+        bad |= lane_bad;
+        k += LANES;
     }
-    bad != 0
+    while k < n {
+        let mut h: [T; Q] = std::array::from_fn(|i| s[i][k]);
+        let m = c.collide(&mut h);
+        for i in 0..Q {
+            *d[i].add(k) = h[i];
+        }
+        bad |= !(m.rho > zero);
+        k += 1;
+    }
+    bad
 }

@@ -157,6 +157,8 @@ pub struct Lattice<T: Real> {
     pub(crate) row_bad: Vec<u8>,
     pub(crate) force_on: Vec<[f64; 2]>,
     pub(crate) step: u64,
+    /// Factor applied to every Zou–He velocity face (start-up ramps).
+    pub(crate) inlet_scale: f64,
 }
 
 impl<T: Real> Lattice<T> {
@@ -229,6 +231,7 @@ impl<T: Real> Lattice<T> {
             row_bad: vec![0; ny],
             force_on: vec![[0.0; 2]; ns],
             step: 0,
+            inlet_scale: 1.0,
         }
     }
 
@@ -261,6 +264,10 @@ impl<T: Real> Lattice<T> {
     /// Momentum-exchange force (lattice units) on solid `id` during the last step.
     pub fn force_on(&self, id: u16) -> [f64; 2] {
         self.force_on[id as usize - 1]
+    }
+    /// Scale every velocity face by `factor` from the next step on (start-up ramps).
+    pub fn set_inlet_scale(&mut self, factor: f64) {
+        self.inlet_scale = factor;
     }
     /// Solids known to the lattice.
     pub fn solids(&self) -> &[SolidInfo] {

@@ -13,6 +13,7 @@ pub mod d2q9;
 pub mod fields;
 pub mod geometry;
 pub mod kernel;
+pub mod lanes;
 pub mod lattice;
 pub mod real;
 

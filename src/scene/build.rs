@@ -67,6 +67,7 @@ pub fn build_lattice(v: &ValidScene) -> Result<BuiltGeometry, SceneError> {
             BoundarySpec::Velocity {
                 velocity_m_s,
                 profile,
+                ..
             } => {
                 let peak = vel(*velocity_m_s);
                 let values = (0..along)

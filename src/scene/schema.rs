@@ -177,6 +177,10 @@ pub enum BoundarySpec {
         /// Profile along the face.
         #[serde(default)]
         profile: Profile,
+        /// Ramp the velocity up as sin²(πt / 2T) over this time (s); 0 = impulsive start.
+        /// A ramp avoids the pressure waves an impulsive start sends between open faces.
+        #[serde(default)]
+        ramp_time_s: f64,
     },
     /// Zou–He pressure inlet/outlet.
     Pressure {
@@ -273,6 +277,9 @@ pub struct Run {
     pub probe_every: u64,
 }
 
+fn default_signal() -> String {
+    "pressure".into()
+}
 fn default_precision() -> String {
     "f64".into()
 }
@@ -350,12 +357,16 @@ pub enum Analysis {
         #[serde(default)]
         average_last_s: f64,
     },
-    /// Dominant frequency of a point probe's pressure after `skip_s` (FFT):
-    /// `<probe>.strouhal` = f D / U and `<probe>.relative_oscillation`
-    /// (peak-to-peak pressure over ½ρU², a shedding indicator).
+    /// Dominant frequency of a point probe's signal after `skip_s` (FFT):
+    /// `<probe>.strouhal` = f D / U and `<probe>.relative_oscillation` (peak-to-peak of the
+    /// signal over ½ρU² for pressure, over U for velocity: a shedding indicator).
     Strouhal {
         /// Point probe.
         probe: String,
+        /// Signal: "pressure" (default, as the seed study) or "uy" (transverse velocity;
+        /// on the wake axis it oscillates only when vortices shed, never from acoustics).
+        #[serde(default = "default_signal")]
+        signal: String,
         /// U (m/s).
         velocity_m_s: f64,
         /// D (m).

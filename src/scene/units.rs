@@ -52,9 +52,10 @@ impl Units {
     pub fn drho_to_pressure(&self, drho: f64) -> f64 {
         drho / 3.0 * self.density_kg_m3 * (self.dx_m / self.dt_s).powi(2)
     }
-    /// Lattice force (per step, 2-D) → N per metre of depth.
+    /// Lattice force (momentum per step of a 2-D lattice) → N per metre of depth:
+    /// mass per depth ρΔx², velocity Δx/Δt, per Δt.
     pub fn force_to_si(&self, f: f64) -> f64 {
-        f * self.density_kg_m3 * self.dx_m.powi(3) / self.dt_s.powi(2) / self.dx_m
+        f * self.density_kg_m3 * self.dx_m.powi(3) / self.dt_s.powi(2)
     }
     /// Time step count → seconds.
     pub fn time_si(&self, steps: u64) -> f64 {

@@ -225,6 +225,15 @@ fn validate_boundaries(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
                 ));
             }
         }
+        if let BoundarySpec::Velocity { ramp_time_s, .. } = spec {
+            if !(ramp_time_s.is_finite() && *ramp_time_s >= 0.0) {
+                return Err(ctx.err(
+                    "ramp_time_s",
+                    0,
+                    format!("ramp_time_s must be ≥ 0 s, got {ramp_time_s}"),
+                ));
+            }
+        }
         if let BoundarySpec::Velocity { velocity_m_s, .. }
         | BoundarySpec::MovingWall { velocity_m_s } = spec
         {
