@@ -1,3 +1,7 @@
+// `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it is true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Numerical kernels index several arrays in lock-step; iterator chains would obscure them.
+#![allow(clippy::needless_range_loop)]
 //! grainflow: fluid–grain flow solver for geomechanics.
 //!
 //! The fluid core is a 2-D D2Q9 lattice Boltzmann solver ([`lbm`]); scenes are TOML files

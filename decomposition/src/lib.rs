@@ -1,3 +1,5 @@
+// `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it is true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 //! Domain decomposition for grainflow, with no physics in it.
 //!
 //! * [`Comm`]: the small communicator interface every solver talks to. [`SingleProcess`]

@@ -20,6 +20,13 @@ pub struct FieldData<'a> {
     pub values: &'a [f64],
 }
 
+/// A snapshot already in the file: group name, time and (field, components).
+struct Written {
+    group: String,
+    time_s: f64,
+    fields: Vec<(String, usize)>,
+}
+
 /// An open snapshot series.
 pub struct SnapshotWriter {
     path: PathBuf,
@@ -27,7 +34,7 @@ pub struct SnapshotWriter {
     nx: usize,
     ny: usize,
     dx: f64,
-    written: Vec<(String, f64, Vec<(String, usize)>)>,
+    written: Vec<Written>,
 }
 
 impl SnapshotWriter {
@@ -104,7 +111,11 @@ impl SnapshotWriter {
             names.push((f.name.to_string(), f.components));
         }
         self.file.flush().map_err(h5)?;
-        self.written.push((group_name, time_s, names));
+        self.written.push(Written {
+            group: group_name,
+            time_s,
+            fields: names,
+        });
         self.write_xdmf()
     }
 
@@ -112,7 +123,12 @@ impl SnapshotWriter {
     fn write_xdmf(&self) -> Result<(), OutputError> {
         let (nx, ny, dx) = (self.nx, self.ny, self.dx);
         let mut s = String::from("<?xml version=\"1.0\" ?>\n<Xdmf Version=\"2.0\">\n <Domain>\n  <Grid Name=\"fields\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
-        for (group, t, names) in &self.written {
+        for Written {
+            group,
+            time_s: t,
+            fields: names,
+        } in &self.written
+        {
             let _ = write!(
                 s,
                 "   <Grid Name=\"{group}\" GridType=\"Uniform\">\n    <Time Value=\"{t:e}\"/>\n    <Topology TopologyType=\"2DCoRectMesh\" Dimensions=\"{} {}\"/>\n    <Geometry GeometryType=\"ORIGIN_DXDY\">\n     <DataItem Dimensions=\"2\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">0 0</DataItem>\n     <DataItem Dimensions=\"2\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">{dx:e} {dx:e}</DataItem>\n    </Geometry>\n",

@@ -1,0 +1,229 @@
+//! Bad input gets a clear error naming the key and line, and loses nothing; a run that blows
+//! up stops at once with the step and cell, keeps its output and exits non-zero.
+mod common;
+use common::*;
+use std::process::Command;
+
+const GOOD: &str = r#"title = "tiny box"
+[domain]
+cells = [16, 8]
+spacing_m = 0.01
+
+[fluid]
+density_kg_m3 = 1000.0
+viscosity_m2_s = 1.0e-4
+reference_velocity_m_s = 0.01
+reference_length_m = 0.08
+lattice_velocity = 0.05
+
+[boundaries]
+west = { kind = "periodic" }
+east = { kind = "periodic" }
+south = { kind = "wall" }
+north = { kind = "moving-wall", velocity_m_s = [0.01, 0.0] }
+
+[run]
+steps = 20
+"#;
+
+/// Run the binary on `scene` text; returns (exit code, stdout+stderr, temp dir).
+fn grainflow(scene: &str, extra: &[&str]) -> (i32, String, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, scene).unwrap();
+    let out = dir.path().join("out");
+    let mut args = vec![
+        "run".to_string(),
+        path.display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+        "--quiet".into(),
+    ];
+    args.extend(extra.iter().map(|s| s.to_string()));
+    let o = Command::new(env!("CARGO_BIN_EXE_grainflow"))
+        .args(&args)
+        .output()
+        .unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    (o.status.code().unwrap_or(-1), text, dir)
+}
+
+fn expect_error(scene: &str, needles: &[&str]) {
+    let (code, text, _d) = grainflow(scene, &[]);
+    assert_eq!(code, 1, "expected failure, got {code}:\n{text}");
+    for n in needles {
+        assert!(text.contains(n), "message lacks `{n}`:\n{text}");
+    }
+}
+
+#[test]
+fn good_scene_runs() {
+    let (code, text, d) = grainflow(GOOD, &[]);
+    assert_eq!(code, 0, "{text}");
+    for f in [
+        "summary.json",
+        "fields.h5",
+        "fields.xdmf",
+        "pictures/speed_00000020.png",
+    ] {
+        assert!(d.path().join("out").join(f).is_file(), "missing {f}");
+    }
+}
+
+#[test]
+fn unknown_key_names_key_and_line() {
+    let s = GOOD.replace("spacing_m = 0.01", "spacing_m = 0.01\nspacing_mm = 10");
+    expect_error(&s, &["unknown field `spacing_mm`", "line 5"]);
+}
+
+#[test]
+fn missing_key_is_named() {
+    let s = GOOD.replace("viscosity_m2_s = 1.0e-4\n", "");
+    expect_error(&s, &["missing field `viscosity_m2_s`"]);
+}
+
+#[test]
+fn negative_viscosity_names_key_and_line() {
+    let s = GOOD.replace("viscosity_m2_s = 1.0e-4", "viscosity_m2_s = -1.0e-4");
+    expect_error(&s, &["scene.toml:8", "`viscosity_m2_s`", "positive"]);
+}
+
+#[test]
+fn tau_at_or_below_half_is_rejected() {
+    let s = GOOD.replace("lattice_velocity = 0.05", "relaxation_time = 0.5");
+    expect_error(
+        &s,
+        &["`relaxation_time`", "τ = 0.500000 ≤ ½", "scene.toml:11"],
+    );
+}
+
+#[test]
+fn high_mach_is_rejected_unless_allowed() {
+    let s = GOOD.replace("lattice_velocity = 0.05", "lattice_velocity = 0.2");
+    expect_error(&s, &["Mach number 0.346", "allow_high_mach"]);
+    let s = s.replace(
+        "lattice_velocity = 0.2",
+        "lattice_velocity = 0.2\nallow_high_mach = true",
+    );
+    let (code, text, _d) = grainflow(&s, &[]);
+    assert_eq!(code, 0, "{text}");
+}
+
+#[test]
+fn obstacle_outside_domain_is_rejected() {
+    let s = format!("{GOOD}\n[[obstacles]]\nname = \"rock\"\nshape = \"circle\"\ncentre_m = [0.15, 0.04]\nradius_m = 0.02\n");
+    expect_error(
+        &s,
+        &[
+            "obstacle `rock` extends outside the domain",
+            "`name`",
+            "scene.toml:23",
+        ],
+    );
+}
+
+#[test]
+fn unpaired_periodic_face_is_rejected() {
+    let s = GOOD.replace(
+        "east = { kind = \"periodic\" }",
+        "east = { kind = \"outflow\" }",
+    );
+    expect_error(&s, &["periodic boundaries come in pairs", "`west`"]);
+}
+
+#[test]
+fn unwritable_output_folder_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let blocker = dir.path().join("file");
+    std::fs::write(&blocker, b"x").unwrap();
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, GOOD).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_grainflow"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            blocker.join("sub").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text.contains("cannot write") && text.contains("file/sub"),
+        "{text}"
+    );
+}
+
+#[test]
+fn check_on_unknown_quantity_is_rejected_before_running() {
+    let s = format!("{GOOD}\n[[checks]]\nquantity = \"drag.lift\"\nmax = 1.0\n");
+    expect_error(&s, &["check on unknown quantity `drag.lift`"]);
+}
+
+/// A closed cavity at Re ≈ 16 000 on 16 × 8 cells (τ ≈ 0.5015, lid u_lb = 0.5, BGK, no
+/// closure) cannot stay stable.
+#[test]
+fn blow_up_stops_with_step_and_cell_and_keeps_output() {
+    let s = GOOD
+        .replace(
+            "lattice_velocity = 0.05",
+            "lattice_velocity = 0.5\nallow_high_mach = true",
+        )
+        .replace("viscosity_m2_s = 1.0e-4", "viscosity_m2_s = 1.0e-7")
+        .replace(
+            "west = { kind = \"periodic\" }",
+            "west = { kind = \"wall\" }",
+        )
+        .replace(
+            "east = { kind = \"periodic\" }",
+            "east = { kind = \"wall\" }",
+        )
+        .replace("steps = 20", "steps = 5000\noutput_every = 10");
+    let (code, text, d) = grainflow(&s, &[]);
+    assert_eq!(code, 3, "{text}");
+    assert!(
+        text.contains("unstable at step") && text.contains("cell ("),
+        "{text}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("out/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "unstable");
+    let steps = summary["steps"].as_u64().unwrap();
+    assert!(steps > 0 && steps < 5000);
+    // Every snapshot before the failure is still there, and the last good state too.
+    let pics = std::fs::read_dir(d.path().join("out/pictures"))
+        .unwrap()
+        .count();
+    assert!(
+        pics >= 2 * (steps as usize / 10 + 1),
+        "{pics} pictures for {steps} steps"
+    );
+}
+
+#[test]
+fn check_and_info_commands() {
+    let o = Command::new(env!("CARGO_BIN_EXE_grainflow"))
+        .args([
+            "check",
+            root().join("jobs/cylinder/scene.toml").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success());
+    assert!(
+        text.contains("relaxation time  τ = 0.600000") && text.contains("memory estimate"),
+        "{text}"
+    );
+    let o = Command::new(env!("CARGO_BIN_EXE_grainflow"))
+        .arg("info")
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stdout).contains("threads:"));
+}

@@ -1,0 +1,87 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use grainflow::run::{run, Precision, RunOptions, Status, Summary};
+use std::path::{Path, PathBuf};
+
+/// Repository root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Run a scene file through the library; output goes to a fresh temporary folder.
+pub fn run_scene(path: &Path, precision: Option<Precision>) -> (Summary, tempfile::TempDir) {
+    let scene = grainflow::scene::load(path).unwrap_or_else(|e| panic!("{e}"));
+    run_valid(&scene, precision)
+}
+
+/// Run scene text (written next to `like` so relative paths resolve).
+pub fn run_text(
+    text: &str,
+    dir: &Path,
+    precision: Option<Precision>,
+) -> (Summary, tempfile::TempDir) {
+    let path = dir.join("__test_scene.toml");
+    let scene = grainflow::scene::parse(text, &path).unwrap_or_else(|e| panic!("{e}"));
+    run_valid(&scene, precision)
+}
+
+fn run_valid(
+    scene: &grainflow::scene::ValidScene,
+    precision: Option<Precision>,
+) -> (Summary, tempfile::TempDir) {
+    let out = tempfile::tempdir().expect("temp dir");
+    let opts = RunOptions {
+        out_dir: out.path().to_path_buf(),
+        precision,
+        steps: None,
+        progress: false,
+    };
+    let s = run(scene, &opts).unwrap_or_else(|e| panic!("{e}"));
+    (s, out)
+}
+
+/// Assert the run finished and every check of the scene passed, printing them.
+pub fn assert_checks_pass(s: &Summary) {
+    for c in &s.checks {
+        eprintln!(
+            "  {} = {:?} (expected {:?} ±{:?}/{:?}, min {:?}, max {:?}) passed={}",
+            c.quantity,
+            c.value,
+            c.expected,
+            c.tolerance,
+            c.relative_tolerance,
+            c.min,
+            c.max,
+            c.passed
+        );
+    }
+    assert_eq!(
+        s.status,
+        Status::Ok,
+        "status {:?}, error {:?}",
+        s.status,
+        s.error
+    );
+    assert!(
+        !s.checks.is_empty(),
+        "a validation scene must declare checks"
+    );
+}
+
+/// A named result.
+pub fn result(s: &Summary, name: &str) -> f64 {
+    *s.results
+        .get(name)
+        .unwrap_or_else(|| panic!("no result {name}; have {:?}", s.results.keys()))
+}
+
+/// A scene from `jobs/` with some text replacements applied.
+pub fn scene_variant(rel: &str, replacements: &[(&str, &str)]) -> String {
+    let mut text = std::fs::read_to_string(root().join(rel)).expect("scene");
+    for (a, b) in replacements {
+        assert!(text.contains(a), "{rel} does not contain `{a}`");
+        text = text.replace(a, b);
+    }
+    text
+}
