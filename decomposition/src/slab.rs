@@ -157,7 +157,10 @@ mod tests {
             for r in 0..ranks {
                 let s = p.slab(r);
                 assert_eq!(s.x_begin, next);
-                assert!(s.width() >= 3 && s.width() <= 4, "{s:?}");
+                assert!(
+                    s.width() >= 23 / ranks && s.width() <= 23usize.div_ceil(ranks),
+                    "{s:?}"
+                );
                 next = s.x_end;
             }
             assert_eq!(next, 23);
