@@ -37,7 +37,7 @@ kernel = ps.create_kernel(rule, config=cfg).compile()
 w = np.array([4 / 9] + [1 / 9] * 4 + [1 / 36] * 4, dtype=dtype)
 # fzyx: the population index is the slowest; numpy axis order stays (x, y, f).
 a = np.ascontiguousarray(np.broadcast_to(w, (n + 2, n + 2, q)).transpose(2, 1, 0)).transpose(2, 1, 0)
-b = a.copy()
+b = a.copy(order="K")  # keep the fzyx strides (a plain copy() is C-contiguous)
 for _ in range(5):
     kernel(src=a, dst=b)
     a, b = b, a

@@ -1,5 +1,5 @@
 //! Explicit SIMD-friendly lanes: the collision is written once over [`Simd`], instantiated
-//! with a plain scalar for boundary cells and with [`Lanes`] (8 cells at a time) in the bulk
+//! with a plain scalar for boundary cells and with [`Lanes`] (one AVX register of cells at a time) in the bulk
 //! row kernel. Element-wise loops over a fixed-size array are reliably turned into vector
 //! instructions by LLVM, unlike a long loop body left to the auto-vectoriser.
 
@@ -34,9 +34,6 @@ impl<T: Real> Simd for T {
         Real::sqrt(self)
     }
 }
-
-/// Lane width of the bulk kernel (8 × f32 = one AVX register; 8 × f64 = two).
-pub const LANES: usize = 8;
 
 /// `N` values processed together.
 #[derive(Clone, Copy, Debug)]
