@@ -1,5 +1,6 @@
 //! Lattice storage, cell types and the per-row execution plan.
 
+use super::aligned::AlignedBuf;
 use super::collision::{Collision, CollisionParams};
 use super::d2q9::{CX, CY, Q, W};
 use super::real::Real;
@@ -143,7 +144,7 @@ pub struct Lattice<T: Real> {
     pub(crate) ny: usize,
     pub(crate) stride: usize,
     pub(crate) plane: usize,
-    pub(crate) buf: [Vec<T>; 2],
+    pub(crate) buf: [AlignedBuf<T>; 2],
     pub(crate) cur: usize,
     pub(crate) types: Vec<u16>,
     pub(crate) plan: Vec<RowPlan>,
@@ -168,7 +169,9 @@ impl<T: Real> Lattice<T> {
         let (nx, ny) = (setup.nx, setup.ny);
         assert_eq!(setup.cells.len(), nx * ny, "cell array size");
         let stride = nx + 2;
-        let plane = stride * (ny + 2);
+        // Planes padded to 16 values: every plane then has the same 64-byte alignment phase,
+        // which the non-temporal stores of the bulk kernel rely on.
+        let plane = (stride * (ny + 2)).div_ceil(16) * 16;
         let mut types = vec![FLUID; plane];
         for y in 0..ny {
             for x in 0..nx {
@@ -206,7 +209,7 @@ impl<T: Real> Lattice<T> {
         }
         let plan = (0..ny).map(|y| row_plan(&types, stride, nx, y)).collect();
         // Rest state: h = f − w = 0 everywhere.
-        let buf = [vec![T::default(); Q * plane], vec![T::default(); Q * plane]];
+        let buf = [AlignedBuf::zeros(Q * plane), AlignedBuf::zeros(Q * plane)];
         let ns = setup.solids.len();
         Self {
             nx,

@@ -7,6 +7,7 @@
 //! needs. Bulk cells run a vectorised row kernel; cells touching solids or open boundaries
 //! run a scalar path that reconstructs their links first.
 
+pub mod aligned;
 pub mod boundary;
 pub mod collision;
 pub mod d2q9;
