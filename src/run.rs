@@ -6,10 +6,10 @@ use crate::io::atomic::{ensure_writable_dir, write_atomic};
 use crate::io::hdf5_out::{FieldData, SnapshotWriter};
 use crate::io::picture::{robust_limit, write_field_png, Scale};
 use crate::io::OutputError;
-use crate::lbm::fields::Totals;
+use crate::lbm::fields::{Fields, Totals};
 use crate::lbm::Real;
 use crate::progress::Progress;
-use crate::scene::{SceneError, Units, ValidScene};
+use crate::scene::{FieldName, SceneError, Units, ValidScene};
 use crate::simulation::{Simulation, STAGES};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -17,15 +17,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use thiserror::Error;
 
-/// Floating-point precision of a run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// Single.
-    F32,
-    /// Double.
-    F64,
-}
+pub use crate::scene::Precision;
 
 /// Options from the command line that override or complement the scene.
 #[derive(Debug, Clone)]
@@ -139,13 +131,7 @@ pub fn run(scene: &ValidScene, opts: &RunOptions) -> Result<Summary, RunError> {
         }
     }
     ensure_writable_dir(&opts.out_dir)?;
-    let precision = opts
-        .precision
-        .unwrap_or(if scene.scene.run.precision == "f32" {
-            Precision::F32
-        } else {
-            Precision::F64
-        });
+    let precision = opts.precision.unwrap_or(scene.scene.run.precision);
     match precision {
         Precision::F32 => run_typed::<f32>(scene, opts, precision),
         Precision::F64 => run_typed::<f64>(scene, opts, precision),
@@ -171,10 +157,13 @@ fn run_typed<T: Real>(
     let mut sim = Simulation::<T>::new(scene)?;
     let (nx, ny) = (sim.lattice.nx(), sim.lattice.ny());
     let mut out = Output::new(&opts.out_dir, scene, nx, ny)?;
-    let totals_initial = sim.lattice.fields().totals();
+    // Fields are computed once per output step and shared by snapshot, totals and analyses.
+    let initial = sim.lattice.fields();
+    let totals_initial = initial.totals();
     if run.output_every > 0 {
-        out.snapshot(&sim)?;
+        out.snapshot(0, &scene.units, &initial)?;
     }
+    let mut latest = (0, initial);
     sim.record_probes();
     let mut progress = Progress::new(n, (nx * ny) as f64, scene.units.dt_s, opts.progress);
     let start = Instant::now();
@@ -189,7 +178,8 @@ fn run_typed<T: Real>(
         }
         if (run.output_every > 0 && step % run.output_every == 0) || step == n {
             let t = Instant::now();
-            out.snapshot(&sim)?;
+            latest = (step, sim.lattice.fields());
+            out.snapshot(step, &scene.units, &latest.1)?;
             sim.times.seconds[3] += t.elapsed().as_secs_f64();
         }
         progress.update(step);
@@ -197,11 +187,15 @@ fn run_typed<T: Real>(
     let wall = start.elapsed().as_secs_f64();
     progress.finish();
     let steps = sim.lattice.steps_done();
+    let fields = if latest.0 == steps {
+        latest.1
+    } else {
+        sim.lattice.fields()
+    };
     if error.is_some() {
         // Keep the last good state for diagnosis; earlier snapshots stay untouched.
-        out.snapshot(&sim)?;
+        out.snapshot(steps, &scene.units, &fields)?;
     }
-    let fields = sim.lattice.fields();
     let totals_final = fields.totals();
     let results = if error.is_none() {
         analysis::run_all(&analysis::Inputs {
@@ -274,7 +268,7 @@ fn run_typed<T: Real>(
 struct Output {
     dir: PathBuf,
     h5: SnapshotWriter,
-    fields: Vec<String>,
+    fields: Vec<FieldName>,
     pictures: bool,
 }
 
@@ -293,10 +287,8 @@ impl Output {
         })
     }
 
-    fn snapshot<T: Real>(&mut self, sim: &Simulation<T>) -> Result<(), OutputError> {
-        let u = &sim.units;
-        let step = sim.lattice.steps_done();
-        let f = sim.lattice.fields();
+    /// Write the fields `f` (lattice units) of `step` to HDF5 and, if enabled, as pictures.
+    fn snapshot(&mut self, step: u64, u: &Units, f: &Fields) -> Result<(), OutputError> {
         let density: Vec<f64> = f.rho.iter().map(|r| r * u.density_kg_m3).collect();
         let velocity: Vec<f64> =
             f.ux.iter()
@@ -306,25 +298,16 @@ impl Output {
         let vorticity: Vec<f64> = f.vorticity().iter().map(|w| w / u.dt_s).collect();
         let mut data = Vec::new();
         for name in &self.fields {
-            data.push(match name.as_str() {
-                "density" => FieldData {
-                    name: "density",
-                    units: "kg/m^3",
-                    components: 1,
-                    values: &density,
-                },
-                "velocity" => FieldData {
-                    name: "velocity",
-                    units: "m/s",
-                    components: 2,
-                    values: &velocity,
-                },
-                _ => FieldData {
-                    name: "vorticity",
-                    units: "1/s",
-                    components: 1,
-                    values: &vorticity,
-                },
+            let (units, components, values) = match name {
+                FieldName::Density => ("kg/m^3", 1, &density),
+                FieldName::Velocity => ("m/s", 2, &velocity),
+                FieldName::Vorticity => ("1/s", 1, &vorticity),
+            };
+            data.push(FieldData {
+                name: name.as_str(),
+                units,
+                components,
+                values,
             });
         }
         self.h5.write(step, u.time_si(step), &data)?;

@@ -81,6 +81,19 @@ fn unknown_key_names_key_and_line() {
 }
 
 #[test]
+fn unknown_variant_is_rejected_at_parse_time() {
+    let s = GOOD.replace("steps = 20", "steps = 20\nprecision = \"f16\"");
+    expect_error(
+        &s,
+        &[
+            "unknown variant `f16`",
+            "expected `f32` or `f64`",
+            "line 21",
+        ],
+    );
+}
+
+#[test]
 fn missing_key_is_named() {
     let s = GOOD.replace("viscosity_m2_s = 1.0e-4\n", "");
     expect_error(&s, &["missing field `viscosity_m2_s`"]);

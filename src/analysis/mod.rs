@@ -114,7 +114,7 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
             } => signals::strouhal(
                 inp,
                 probe,
-                signal,
+                *signal,
                 *velocity_m_s,
                 *length_m,
                 *skip_s,

@@ -2,6 +2,7 @@
 
 use super::{err, AnalysisError, Inputs, Results};
 use crate::io::probes::Series;
+use crate::scene::Signal;
 use rustfft::{num_complex::Complex, FftPlanner};
 
 fn find<'a>(inp: &'a Inputs, probe: &str, analysis: &str) -> Result<&'a Series, AnalysisError> {
@@ -43,14 +44,14 @@ pub fn force_coefficients(
 pub fn strouhal(
     inp: &Inputs,
     probe: &str,
-    signal: &str,
+    signal: Signal,
     u: f64,
     d: f64,
     skip_s: f64,
     r: &mut Results,
 ) -> Result<(), AnalysisError> {
     let s = find(inp, probe, "strouhal")?;
-    let column = if signal == "uy" {
+    let column = if signal == Signal::Uy {
         "uy_m_s"
     } else {
         "pressure_pa"
@@ -83,7 +84,7 @@ pub fn strouhal(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    let q = if signal == "uy" {
+    let q = if signal == Signal::Uy {
         u
     } else {
         0.5 * inp.scene.scene.fluid.density_kg_m3 * u * u

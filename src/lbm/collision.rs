@@ -16,49 +16,6 @@ use super::d2q9::{CX, CY, Q, W};
 use super::lanes::Simd;
 use super::real::Real;
 
-/// Expand `$body` once per direction with `$i` a compile-time constant, so every lattice
-/// constant folds and the row loop around the collision vectorises.
-macro_rules! for_each_dir {
-    ($i:ident => $body:block) => {{
-        {
-            const $i: usize = 0;
-            $body
-        }
-        {
-            const $i: usize = 1;
-            $body
-        }
-        {
-            const $i: usize = 2;
-            $body
-        }
-        {
-            const $i: usize = 3;
-            $body
-        }
-        {
-            const $i: usize = 4;
-            $body
-        }
-        {
-            const $i: usize = 5;
-            $body
-        }
-        {
-            const $i: usize = 6;
-            $body
-        }
-        {
-            const $i: usize = 7;
-            $body
-        }
-        {
-            const $i: usize = 8;
-            $body
-        }
-    }};
-}
-
 /// The collision model a scene picks.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Collision {
@@ -193,33 +150,14 @@ pub fn moments<T: Real>(h: &[T; Q], force: [T; 2]) -> Moments<T> {
 }
 
 /// Shifted equilibrium h_i^eq = w_i [δρ + ρ(3 c·u + 4.5 (c·u)² − 1.5 u²)] (Qian et al. 1992).
-#[inline(always)]
+/// Used for initial conditions and as the reference in tests; the kernels work in moment space.
 pub fn equilibrium<T: Real>(m: &Moments<T>) -> [T; Q] {
     let usq = m.ux * m.ux + m.uy * m.uy;
-    let mut eq = [T::default(); Q];
-    let usq15 = T::from_f64(1.5) * usq;
-    for_each_dir!(I => {
-        let cu = dot::<T, I>(m.ux, m.uy);
-        let poly = T::from_f64(3.0) * cu + T::from_f64(4.5) * cu * cu - usq15;
-        eq[I] = T::from_f64(W[I]) * (m.drho + m.rho * poly);
-    });
-    eq
-}
-
-/// c_I · (a, b) with the zero components dropped at compile time.
-#[inline(always)]
-fn dot<T: Real, const I: usize>(a: T, b: T) -> T {
-    match (CX[I], CY[I]) {
-        (0, 0) => T::default(),
-        (1, 0) => a,
-        (-1, 0) => -a,
-        (0, 1) => b,
-        (0, -1) => -b,
-        (1, 1) => a + b,
-        (-1, 1) => b - a,
-        (-1, -1) => -(a + b),
-        _ => a - b,
-    }
+    std::array::from_fn(|i| {
+        let cu = T::from_f64(CX[i] as f64) * m.ux + T::from_f64(CY[i] as f64) * m.uy;
+        let poly = T::from_f64(3.0) * cu + T::from_f64(4.5) * cu * cu - T::from_f64(1.5) * usq;
+        T::from_f64(W[i]) * (m.drho + m.rho * poly)
+    })
 }
 
 /// Smagorinsky relaxation time from the non-equilibrium momentum flux (Hou et al. 1996).

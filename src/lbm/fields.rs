@@ -45,10 +45,7 @@ impl<T: Real> Lattice<T> {
     pub(crate) fn gather(&self, x: usize, y: usize) -> [T; Q] {
         let src = &self.buf[self.cur];
         let k = self.idx(x as isize, y as isize);
-        let plain = (0..Q).all(|i| {
-            let n = (k as isize - CX[i] as isize - CY[i] as isize * self.stride as isize) as usize;
-            self.types[n] == super::lattice::FLUID
-        });
+        let plain = super::lattice::is_plain(&self.types, self.stride, k);
         if plain {
             std::array::from_fn(|i| {
                 let n =

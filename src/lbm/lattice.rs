@@ -1,8 +1,8 @@
 //! Lattice storage, cell types and the per-row execution plan.
 
 use super::aligned::AlignedBuf;
-use super::collision::{Collision, CollisionParams};
-use super::d2q9::{CX, CY, Q, W};
+use super::collision::{equilibrium, Collision, CollisionParams, Moments};
+use super::d2q9::{CX, CY, Q};
 use super::real::Real;
 use thiserror::Error;
 
@@ -287,16 +287,26 @@ impl<T: Real> Lattice<T> {
     /// Used for initial conditions.
     pub fn set_equilibrium(&mut self, x: usize, y: usize, rho: f64, u: [f64; 2]) {
         let k = self.idx(x as isize, y as isize);
-        let usq = u[0] * u[0] + u[1] * u[1];
-        for i in 0..Q {
-            let cu = CX[i] as f64 * u[0] + CY[i] as f64 * u[1];
-            // Shifted equilibrium (Qian et al. 1992).
-            let h = W[i] * ((rho - 1.0) + rho * (3.0 * cu + 4.5 * cu * cu - 1.5 * usq));
+        let eq = equilibrium(&Moments {
+            drho: rho - 1.0,
+            rho,
+            ux: u[0],
+            uy: u[1],
+        });
+        for (i, h) in eq.iter().enumerate() {
             for b in 0..2 {
-                self.buf[b][i * self.plane + k] = T::from_f64(h);
+                self.buf[b][i * self.plane + k] = T::from_f64(*h);
             }
         }
     }
+}
+
+/// Whether every neighbour of padded cell `k` is plain fluid (the bulk kernel may pull it
+/// without boundary handling).
+pub(crate) fn is_plain(types: &[u16], stride: usize, k: usize) -> bool {
+    (1..Q).all(|i| {
+        types[(k as isize - CX[i] as isize - CY[i] as isize * stride as isize) as usize] == FLUID
+    })
 }
 
 /// Classify one interior row into bulk runs and special cells.
@@ -307,11 +317,7 @@ fn row_plan(types: &[u16], stride: usize, nx: usize, y: usize) -> RowPlan {
     for x in 0..nx {
         let k = yp * stride + x + 1;
         let fluid = types[k] == FLUID;
-        let plain = fluid
-            && (1..Q).all(|i| {
-                let n = (k as isize - CX[i] as isize - CY[i] as isize * stride as isize) as usize;
-                types[n] == FLUID
-            });
+        let plain = fluid && is_plain(types, stride, k);
         match (plain, run_start) {
             (true, None) => run_start = Some(x as u32),
             (false, Some(s)) => {

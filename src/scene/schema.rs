@@ -261,14 +261,14 @@ pub struct Run {
     #[serde(default)]
     pub end_time_s: Option<f64>,
     /// "f32" or "f64" (default f64); the CLI may override.
-    #[serde(default = "default_precision")]
-    pub precision: String,
+    #[serde(default)]
+    pub precision: Precision,
     /// Snapshot (HDF5 + PNG) every this many steps; 0 = only at the end.
     #[serde(default)]
     pub output_every: u64,
     /// Fields in snapshots: any of "density", "velocity", "vorticity".
     #[serde(default = "default_fields")]
-    pub fields: Vec<String>,
+    pub fields: Vec<FieldName>,
     /// Write PNG pictures with each snapshot.
     #[serde(default = "default_true")]
     pub pictures: bool,
@@ -277,14 +277,57 @@ pub struct Run {
     pub probe_every: u64,
 }
 
-fn default_signal() -> String {
-    "pressure".into()
+fn default_fields() -> Vec<FieldName> {
+    vec![
+        FieldName::Density,
+        FieldName::Velocity,
+        FieldName::Vorticity,
+    ]
 }
-fn default_precision() -> String {
-    "f64".into()
+
+/// Floating-point precision of a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// Single (half the memory traffic).
+    F32,
+    /// Double.
+    #[default]
+    F64,
 }
-fn default_fields() -> Vec<String> {
-    vec!["density".into(), "velocity".into(), "vorticity".into()]
+
+/// A field written to snapshots.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FieldName {
+    /// Density (kg/m³).
+    Density,
+    /// Velocity (m/s), two components.
+    Velocity,
+    /// Vorticity (1/s).
+    Vorticity,
+}
+
+impl FieldName {
+    /// Dataset name in the HDF5 file.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FieldName::Density => "density",
+            FieldName::Velocity => "velocity",
+            FieldName::Vorticity => "vorticity",
+        }
+    }
+}
+
+/// Which probe signal a Strouhal analysis transforms.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Signal {
+    /// Pressure (as the seed study).
+    #[default]
+    Pressure,
+    /// Transverse velocity: on the wake axis it oscillates only when vortices shed.
+    Uy,
 }
 fn default_true() -> bool {
     true
@@ -365,8 +408,8 @@ pub enum Analysis {
         probe: String,
         /// Signal: "pressure" (default, as the seed study) or "uy" (transverse velocity;
         /// on the wake axis it oscillates only when vortices shed, never from acoustics).
-        #[serde(default = "default_signal")]
-        signal: String,
+        #[serde(default)]
+        signal: Signal,
         /// U (m/s).
         velocity_m_s: f64,
         /// D (m).

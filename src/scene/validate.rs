@@ -361,25 +361,6 @@ fn validate_run(s: &Scene, ctx: &Context, units: &Units) -> Result<(), SceneErro
         }
         _ => return Err(ctx.err("run", 0, "set exactly one of steps or end_time_s in [run]")),
     }
-    if r.precision != "f32" && r.precision != "f64" {
-        return Err(ctx.err(
-            "precision",
-            0,
-            format!(
-                "precision must be \"f32\" or \"f64\", got \"{}\"",
-                r.precision
-            ),
-        ));
-    }
-    for f in &r.fields {
-        if !["density", "velocity", "vorticity"].contains(&f.as_str()) {
-            return Err(ctx.err(
-                "fields",
-                0,
-                format!("unknown field \"{f}\"; choose from density, velocity, vorticity"),
-            ));
-        }
-    }
     if r.probe_every == 0 {
         return Err(ctx.err("probe_every", 0, "probe_every must be at least 1"));
     }

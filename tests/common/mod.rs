@@ -15,7 +15,7 @@ pub fn run_scene(path: &Path, precision: Option<Precision>) -> (Summary, tempfil
     run_valid(&scene, precision)
 }
 
-/// Run scene text (written next to `like` so relative paths resolve).
+/// Run scene text as if it were a file in `dir` (relative paths in it resolve there).
 pub fn run_text(
     text: &str,
     dir: &Path,
