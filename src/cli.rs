@@ -43,6 +43,9 @@ pub enum Command {
         /// No progress output.
         #[arg(long)]
         quiet: bool,
+        /// Continue from a checkpoint (e.g. runs/NAME/checkpoint.h5), on any rank count.
+        #[arg(long, value_name = "CHECKPOINT")]
+        restart: Option<PathBuf>,
     },
     /// Validate a scene and print the derived lattice parameters and memory estimate.
     Check {

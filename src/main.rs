@@ -5,7 +5,8 @@ mod cli;
 use anyhow::{Context, Result};
 use clap::Parser;
 use cli::{Cli, Command, PrecisionArg};
-use grainflow::run::{run, step_count, Precision, RunOptions, Status};
+use decomposition::{launched_by_mpi, Comm, MpiComm, SingleProcess};
+use grainflow::run::{run_on, step_count, Precision, RunOptions, Status};
 use grainflow::scene;
 
 fn main() {
@@ -15,6 +16,17 @@ fn main() {
             eprintln!("error: {e:#}");
             std::process::exit(1);
         }
+    }
+}
+
+/// The communicator of this process: MPI when started by a launcher (mpirun, srun),
+/// otherwise a single process that never initialises MPI.
+fn communicator() -> Result<Box<dyn Comm>> {
+    if launched_by_mpi() {
+        let c = MpiComm::init().context("initialising MPI")?;
+        Ok(Box::new(c))
+    } else {
+        Ok(Box::new(SingleProcess))
     }
 }
 
@@ -30,7 +42,11 @@ fn real_main() -> Result<i32> {
             println!(
                 "precisions: f32, f64 (CPU kernel, structure-of-arrays, fused pull stream-collide)"
             );
-            println!("ranks: 1 (MPI decomposition not yet built in)");
+            let comm = communicator()?;
+            println!(
+                "ranks: {} (MPI slab decomposition along x; start with mpirun -np N)",
+                comm.size()
+            );
             println!("GPU backends: none built in yet");
             Ok(0)
         }
@@ -46,7 +62,10 @@ fn real_main() -> Result<i32> {
             threads,
             steps,
             quiet,
+            restart,
         } => {
+            let comm = communicator()?;
+            let comm = comm.as_ref();
             if let Some(t) = threads {
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(t)
@@ -82,17 +101,25 @@ fn real_main() -> Result<i32> {
                 }),
                 steps,
                 progress: !quiet,
+                restart,
             };
-            eprintln!(
-                "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} threads",
-                scene.display(),
-                step_count(&s, steps),
-                s.units.tau,
-                s.units.mach,
-                s.units.reynolds,
-                rayon::current_num_threads()
-            );
-            let summary = run(&s, &opts)?;
+            let root = comm.is_root();
+            if root {
+                eprintln!(
+                    "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} rank(s) × {} threads",
+                    scene.display(),
+                    step_count(&s, steps),
+                    s.units.tau,
+                    s.units.mach,
+                    s.units.reynolds,
+                    comm.size(),
+                    rayon::current_num_threads()
+                );
+            }
+            let summary = run_on(&s, &opts, comm)?;
+            if !root {
+                return Ok(exit_code(summary.status));
+            }
             println!(
                 "{} steps in {:.2} s: {:.1} MLUPS (kernel {:.1})",
                 summary.steps, summary.wall_time_s, summary.mlups, summary.kernel_mlups
@@ -115,22 +142,34 @@ fn real_main() -> Result<i32> {
                 "output: {}  (summary.json, fields.h5 + fields.xdmf, pictures/, probe_*.csv)",
                 out.display()
             );
-            Ok(match summary.status {
-                Status::Ok => 0,
-                Status::ChecksFailed => {
-                    eprintln!("error: at least one check failed");
-                    2
-                }
+            match summary.status {
+                Status::Ok => {}
+                Status::ChecksFailed => eprintln!("error: at least one check failed"),
                 Status::Unstable => {
                     eprintln!("error: {}", summary.error.as_deref().unwrap_or("unstable"));
                     eprintln!(
                         "the output written so far is kept in {}, including the last good state",
                         out.display()
                     );
-                    3
                 }
-            })
+                Status::Interrupted => eprintln!(
+                    "stopped by SIGTERM at step {}; continue with --restart {}",
+                    summary.steps,
+                    out.join("checkpoint.h5").display()
+                ),
+            }
+            Ok(exit_code(summary.status))
         }
+    }
+}
+
+/// Exit status: 0 ok, 2 a check failed, 3 unstable, 4 stopped by SIGTERM (checkpoint written).
+fn exit_code(status: Status) -> i32 {
+    match status {
+        Status::Ok => 0,
+        Status::ChecksFailed => 2,
+        Status::Unstable => 3,
+        Status::Interrupted => 4,
     }
 }
 

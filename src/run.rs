@@ -3,17 +3,21 @@
 use crate::analysis::checks::{evaluate, CheckOutcome};
 use crate::analysis::{self, Results};
 use crate::io::atomic::{ensure_writable_dir, write_atomic};
-use crate::io::hdf5_out::{FieldData, SnapshotWriter};
+use crate::io::checkpoint;
+use crate::io::hdf5_out::{FieldData, Layout, SnapshotWriter};
 use crate::io::picture::{robust_limit, write_field_png, Scale};
 use crate::io::OutputError;
 use crate::lbm::fields::{Fields, Totals};
 use crate::lbm::Real;
 use crate::progress::Progress;
 use crate::scene::{FieldName, SceneError, Units, ValidScene};
-use crate::simulation::{Simulation, STAGES};
+use crate::simulation::{stage, Simulation, STAGES};
+use decomposition::{Comm, SingleProcess};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -30,6 +34,8 @@ pub struct RunOptions {
     pub steps: Option<u64>,
     /// Show progress (bar on a terminal, log lines otherwise).
     pub progress: bool,
+    /// Continue from this checkpoint instead of the initial condition.
+    pub restart: Option<PathBuf>,
 }
 
 /// Why a run could not start or finish writing.
@@ -56,6 +62,21 @@ pub enum Status {
     ChecksFailed,
     /// Stopped early: NaN or non-positive density.
     Unstable,
+    /// Stopped by SIGTERM after writing a checkpoint.
+    Interrupted,
+}
+
+/// Seconds of one stage over the ranks.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct StageStats {
+    /// Sum over ranks.
+    pub sum_s: f64,
+    /// Slowest rank.
+    pub max_s: f64,
+    /// Fastest rank.
+    pub min_s: f64,
+    /// Mean over ranks.
+    pub mean_s: f64,
 }
 
 /// Everything `summary.json` holds.
@@ -77,8 +98,16 @@ pub struct Summary {
     pub warnings: Vec<String>,
     /// Precision used.
     pub precision: Precision,
-    /// Rayon threads.
+    /// MPI ranks.
+    pub ranks: usize,
+    /// Rayon threads per rank.
     pub threads: usize,
+    /// Columns `[x_begin, x_end)` of each rank.
+    pub partition: Vec<[usize; 2]>,
+    /// Step the run started from (0, or the checkpoint's step on a restart).
+    pub restarted_from_step: u64,
+    /// Halo bytes sent per step, all ranks together.
+    pub halo_bytes_per_step: u64,
     /// Derived lattice parameters.
     pub units: Units,
     /// Lattice size.
@@ -97,8 +126,12 @@ pub struct Summary {
     pub mlups: f64,
     /// MLUPS of the collide–stream stage alone.
     pub kernel_mlups: f64,
-    /// Seconds per stage.
+    /// Seconds per stage, the slowest rank's (what bounds the run).
     pub stage_seconds: BTreeMap<&'static str, f64>,
+    /// Seconds per stage over ranks: sum, max, min, mean (load imbalance shows as max ≫ min).
+    pub stages: BTreeMap<&'static str, StageStats>,
+    /// Checkpoints written during the run.
+    pub checkpoints: Vec<PathBuf>,
     /// Totals at the start and the end (lattice units).
     pub totals_initial: Totals,
     /// See `totals_initial`.
@@ -111,9 +144,16 @@ pub struct Summary {
     pub checks: Vec<CheckOutcome>,
 }
 
-/// Validate, run and summarise a scene. Writes into `opts.out_dir`. An instability is not
-/// an `Err`: the summary says `unstable` and the output so far is kept.
+/// Validate, run and summarise a scene on one process. See [`run_on`].
 pub fn run(scene: &ValidScene, opts: &RunOptions) -> Result<Summary, RunError> {
+    run_on(scene, opts, &SingleProcess)
+}
+
+/// Validate, run and summarise a scene on every rank of `comm` (collective). Writes into
+/// `opts.out_dir`: every rank writes its block of `fields.h5` and of checkpoints; rank 0
+/// writes `summary.json`, the XDMF, probe CSVs and pictures. An instability is not an
+/// `Err`: the summary says `unstable` and the output so far is kept.
+pub fn run_on(scene: &ValidScene, opts: &RunOptions, comm: &dyn Comm) -> Result<Summary, RunError> {
     let names = analysis::result_names(scene);
     for c in &scene.scene.checks {
         if !names.contains(&c.quantity) {
@@ -130,11 +170,14 @@ pub fn run(scene: &ValidScene, opts: &RunOptions) -> Result<Summary, RunError> {
             .into());
         }
     }
-    ensure_writable_dir(&opts.out_dir)?;
+    if comm.is_root() {
+        ensure_writable_dir(&opts.out_dir)?;
+    }
+    comm.barrier();
     let precision = opts.precision.unwrap_or(scene.scene.run.precision);
     match precision {
-        Precision::F32 => run_typed::<f32>(scene, opts, precision),
-        Precision::F64 => run_typed::<f64>(scene, opts, precision),
+        Precision::F32 => run_typed::<f32>(scene, opts, precision, comm),
+        Precision::F64 => run_typed::<f64>(scene, opts, precision, comm),
     }
 }
 
@@ -147,42 +190,139 @@ pub fn step_count(scene: &ValidScene, override_steps: Option<u64>) -> u64 {
     })
 }
 
-fn run_typed<T: Real>(
+/// SIGTERM (stop) and SIGUSR1 (checkpoint and go on) flags, registered once per process.
+fn signal_flags() -> &'static [Arc<AtomicBool>; 2] {
+    static FLAGS: OnceLock<[Arc<AtomicBool>; 2]> = OnceLock::new();
+    FLAGS.get_or_init(|| {
+        let flags = [
+            Arc::new(AtomicBool::new(false)),
+            Arc::new(AtomicBool::new(false)),
+        ];
+        // Registration fails only for forbidden signals; these two are allowed.
+        let _ = signal_hook::flag::register(signal_hook::consts::SIGTERM, flags[0].clone());
+        let _ = signal_hook::flag::register(signal_hook::consts::SIGUSR1, flags[1].clone());
+        flags
+    })
+}
+
+fn run_typed<T: Real + hdf5::H5Type>(
     scene: &ValidScene,
     opts: &RunOptions,
     precision: Precision,
+    comm: &dyn Comm,
 ) -> Result<Summary, RunError> {
     let run = &scene.scene.run;
     let n = step_count(scene, opts.steps);
-    let mut sim = Simulation::<T>::new(scene)?;
-    let (nx, ny) = (sim.lattice.nx(), sim.lattice.ny());
-    let mut out = Output::new(&opts.out_dir, scene, nx, ny)?;
-    // Fields are computed once per output step and shared by snapshot, totals and analyses.
-    let initial = sim.lattice.fields();
-    let totals_initial = initial.totals();
-    if run.output_every > 0 {
-        out.snapshot(0, &scene.units, &initial)?;
+    let mut sim = Simulation::<T>::new(scene, comm)?;
+    let (nx, ny) = (sim.partition.columns(), sim.lattice.ny());
+    let checkpoint_path = opts.out_dir.join("checkpoint.h5");
+    let mut totals_initial = None;
+    if let Some(path) = &opts.restart {
+        let r = checkpoint::read::<T>(
+            path,
+            comm,
+            T::NAME,
+            [nx, ny],
+            (sim.lattice.x_offset(), sim.lattice.nx()),
+            &sim.series,
+        )?;
+        sim.restore(&r.populations, r.run.step, r.run.series);
+        totals_initial = Some(Totals::from_array(r.run.totals_initial));
     }
-    let mut latest = (0, initial);
-    sim.record_probes();
-    let mut progress = Progress::new(n, (nx * ny) as f64, scene.units.dt_s, opts.progress);
+    let start_step = sim.lattice.steps_done();
+    let layout = Layout {
+        nx,
+        ny,
+        x0: sim.lattice.x_offset(),
+        width: sim.lattice.nx(),
+        dx: scene.units.dx_m,
+    };
+    let resume = opts.restart.as_ref().map(|_| start_step);
+    let mut out = Output::new(&opts.out_dir, scene, layout, comm, resume)?;
+    // Fields are computed once per output step and shared by snapshot, totals and analyses.
+    let initial = sim.fields(comm);
+    let totals_initial = match totals_initial {
+        Some(t) => t,
+        None => sim.totals(comm, &initial),
+    };
+    if start_step == 0 {
+        if run.output_every > 0 {
+            out.snapshot(0, &scene.units, &mut sim, comm, &initial)?;
+        }
+        sim.record_probes(comm);
+    }
+    let mut latest = (start_step, initial);
+    let mut progress = Progress::new(
+        n,
+        (nx * ny) as f64,
+        scene.units.dt_s,
+        opts.progress && comm.is_root(),
+    );
+    let flags = signal_flags();
+    let mut checkpoints = Vec::new();
+    let mut last_checkpoint = Instant::now();
     let start = Instant::now();
     let mut error = None;
-    for step in 1..=n {
-        if let Err(e) = sim.step() {
+    let mut interrupted = false;
+    let write_checkpoint = |sim: &mut Simulation<T>, checkpoints: &mut Vec<PathBuf>| {
+        let t = Instant::now();
+        let pops = sim.lattice.export_interior();
+        let steps = sim.lattice.steps_done();
+        let state = checkpoint::RunState {
+            step: steps,
+            time_s: scene.units.time_si(steps),
+            precision: T::NAME.into(),
+            totals_initial: totals_initial.to_array(),
+            series: sim.series.clone(),
+        };
+        let lat = checkpoint::LatticeState {
+            global: [nx, ny],
+            slab: (sim.lattice.x_offset(), sim.lattice.nx()),
+            populations: &pops,
+        };
+        let r = checkpoint::write(&checkpoint_path, comm, &lat, &state);
+        sim.times.seconds[stage::CHECKPOINT] += t.elapsed().as_secs_f64();
+        checkpoints.push(checkpoint_path.clone());
+        r
+    };
+    for step in start_step + 1..=n {
+        if let Err(e) = sim.step(comm) {
             error = Some(e.to_string());
             break;
         }
         if step % run.probe_every == 0 {
-            sim.record_probes();
+            sim.record_probes(comm);
         }
         if (run.output_every > 0 && step % run.output_every == 0) || step == n {
             let t = Instant::now();
-            latest = (step, sim.lattice.fields());
-            out.snapshot(step, &scene.units, &latest.1)?;
-            sim.times.seconds[3] += t.elapsed().as_secs_f64();
+            let f = sim.fields(comm);
+            out.snapshot(step, &scene.units, &mut sim, comm, &f)?;
+            latest = (step, f);
+            sim.times.seconds[stage::OUTPUT] += t.elapsed().as_secs_f64();
+        }
+        // Signals and wall-clock cadence are agreed on by all ranks, so all checkpoint together.
+        let wall_due = run.checkpoint_minutes > 0.0
+            && last_checkpoint.elapsed().as_secs_f64() >= 60.0 * run.checkpoint_minutes;
+        let term = flags[0].load(Ordering::Relaxed);
+        let usr1 = flags[1].swap(false, Ordering::Relaxed);
+        let local = (term as u8) | (usr1 as u8) << 1 | (wall_due as u8) << 2;
+        let agreed = if comm.size() > 1 {
+            comm.max_f64(local as f64) as u8
+        } else {
+            local
+        };
+        let due = (run.checkpoint_every > 0 && step % run.checkpoint_every == 0)
+            || agreed != 0
+            || (step == n && run.checkpoint_at_end);
+        if due {
+            write_checkpoint(&mut sim, &mut checkpoints)?;
+            last_checkpoint = Instant::now();
         }
         progress.update(step);
+        if agreed & 1 != 0 {
+            interrupted = true;
+            break;
+        }
     }
     let wall = start.elapsed().as_secs_f64();
     progress.finish();
@@ -190,31 +330,41 @@ fn run_typed<T: Real>(
     let fields = if latest.0 == steps {
         latest.1
     } else {
-        sim.lattice.fields()
+        sim.fields(comm)
     };
-    if error.is_some() {
+    if error.is_some() || (interrupted && latest.0 != steps) {
         // Keep the last good state for diagnosis; earlier snapshots stay untouched.
-        out.snapshot(steps, &scene.units, &fields)?;
+        out.snapshot(steps, &scene.units, &mut sim, comm, &fields)?;
     }
-    let totals_final = fields.totals();
-    let results = if error.is_none() {
+    let totals_final = sim.totals(comm, &fields);
+    let results = if error.is_none() && !interrupted && !scene.scene.analyses.is_empty() {
+        let global = sim.gather_fields(comm, &fields);
         analysis::run_all(&analysis::Inputs {
             scene,
-            fields: &fields,
+            fields: &global,
             steps,
             series: &sim.series,
             totals: (totals_initial, totals_final),
         })?
+    } else if error.is_none() && !interrupted {
+        let mut r = Results::new();
+        r.insert("run.mass".into(), totals_final.mass);
+        r.insert(
+            "run.max_speed_m_s".into(),
+            scene.units.velocity_to_si(totals_final.max_speed),
+        );
+        r
     } else {
         Results::new()
     };
     let checks = evaluate(&scene.scene.checks, &results);
-    let status = match (&error, checks.iter().all(|c| c.passed)) {
-        (Some(_), _) => Status::Unstable,
-        (None, true) => Status::Ok,
-        (None, false) => Status::ChecksFailed,
+    let status = match (&error, interrupted, checks.iter().all(|c| c.passed)) {
+        (Some(_), _, _) => Status::Unstable,
+        (None, true, _) => Status::Interrupted,
+        (None, false, true) => Status::Ok,
+        (None, false, false) => Status::ChecksFailed,
     };
-    let updates = (nx * ny) as f64 * steps as f64;
+    let updates = (nx * ny) as f64 * (steps - start_step) as f64;
     let probes = sim
         .series
         .iter()
@@ -230,6 +380,26 @@ fn run_typed<T: Real>(
             (s.name.clone(), row)
         })
         .collect();
+    let per_rank = comm.all_gather_f64(&sim.times.seconds);
+    let k = STAGES.len();
+    let stages: BTreeMap<&'static str, StageStats> = STAGES
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let v: Vec<f64> = (0..comm.size()).map(|r| per_rank[r * k + i]).collect();
+            let sum = v.iter().sum::<f64>();
+            let stats = StageStats {
+                sum_s: sum,
+                max_s: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                min_s: v.iter().copied().fold(f64::INFINITY, f64::min),
+                mean_s: sum / v.len() as f64,
+            };
+            (*name, stats)
+        })
+        .collect();
+    let wall = comm.max_f64(wall);
+    let mut halo_bytes = [sim.lattice.halo_bytes_per_step() as f64];
+    comm.sum_f64(&mut halo_bytes);
     let summary = Summary {
         version: env!("CARGO_PKG_VERSION"),
         scene_path: scene.path.clone(),
@@ -239,63 +409,98 @@ fn run_typed<T: Real>(
         error,
         warnings: scene.warnings.clone(),
         precision,
+        ranks: comm.size(),
         threads: rayon::current_num_threads(),
+        partition: (0..comm.size())
+            .map(|r| {
+                let s = sim.partition.slab(r);
+                [s.x_begin, s.x_end]
+            })
+            .collect(),
+        restarted_from_step: start_step,
+        halo_bytes_per_step: halo_bytes[0] as u64,
         units: scene.units,
         cells: [nx, ny],
-        fluid_cells: sim.lattice.fluid_cells(),
+        fluid_cells: sim.fluid_cells(comm),
         memory_bytes: sim.lattice.storage_bytes(),
         steps,
         simulated_time_s: scene.units.time_si(steps),
         wall_time_s: wall,
         mlups: updates / wall.max(1e-12) / 1e6,
-        kernel_mlups: updates / sim.times.seconds[0].max(1e-12) / 1e6,
-        stage_seconds: STAGES.iter().copied().zip(sim.times.seconds).collect(),
+        kernel_mlups: updates / stages[STAGES[stage::COLLIDE_STREAM]].max_s.max(1e-12) / 1e6,
+        stage_seconds: stages.iter().map(|(k, v)| (*k, v.max_s)).collect(),
+        stages,
+        checkpoints,
         totals_initial,
         totals_final,
         probes,
         results,
         checks,
     };
-    for s in &sim.series {
-        s.write_csv(&opts.out_dir)?;
+    if comm.is_root() {
+        for s in &sim.series {
+            s.write_csv(&opts.out_dir)?;
+        }
+        let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");
+        write_atomic(&opts.out_dir.join("summary.json"), &json)?;
     }
-    let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");
-    write_atomic(&opts.out_dir.join("summary.json"), &json)?;
+    comm.barrier();
     Ok(summary)
 }
 
-/// Snapshot output of one run: HDF5 series, pictures, probe CSVs.
+/// Snapshot output of one run: HDF5 series (every rank its block), pictures (rank 0).
 struct Output {
     dir: PathBuf,
     h5: SnapshotWriter,
     fields: Vec<FieldName>,
     pictures: bool,
+    root: bool,
 }
 
 impl Output {
-    fn new(dir: &Path, scene: &ValidScene, nx: usize, ny: usize) -> Result<Self, OutputError> {
-        if scene.scene.run.pictures {
+    fn new(
+        dir: &Path,
+        scene: &ValidScene,
+        layout: Layout,
+        comm: &dyn Comm,
+        resume_after: Option<u64>,
+    ) -> Result<Self, OutputError> {
+        if scene.scene.run.pictures && comm.is_root() {
             let pics = dir.join("pictures");
             std::fs::create_dir_all(&pics)
                 .map_err(|source| OutputError::Io { path: pics, source })?;
         }
         Ok(Self {
             dir: dir.to_owned(),
-            h5: SnapshotWriter::create(dir, nx, ny, scene.units.dx_m)?,
+            h5: SnapshotWriter::open(dir, comm, layout, scene.scene.run.compression, resume_after)?,
             fields: scene.scene.run.fields.clone(),
             pictures: scene.scene.run.pictures,
+            root: comm.is_root(),
         })
     }
 
-    /// Write the fields `f` (lattice units) of `step` to HDF5 and, if enabled, as pictures.
-    fn snapshot(&mut self, step: u64, u: &Units, f: &Fields) -> Result<(), OutputError> {
+    /// Write this slab's fields `f` (lattice units) of `step` to HDF5 and, if enabled, the
+    /// whole lattice as pictures (gathered on rank 0). Collective.
+    fn snapshot<T: Real>(
+        &mut self,
+        step: u64,
+        u: &Units,
+        sim: &mut Simulation<T>,
+        comm: &dyn Comm,
+        f: &Fields,
+    ) -> Result<(), OutputError> {
         let density: Vec<f64> = f.rho.iter().map(|r| r * u.density_kg_m3).collect();
         let velocity: Vec<f64> =
             f.ux.iter()
                 .zip(&f.uy)
                 .flat_map(|(a, b)| [u.velocity_to_si(*a), u.velocity_to_si(*b)])
                 .collect();
-        let vorticity: Vec<f64> = f.vorticity().iter().map(|w| w / u.dt_s).collect();
+        let need_vorticity = self.pictures || self.fields.contains(&FieldName::Vorticity);
+        let vorticity: Vec<f64> = if need_vorticity {
+            sim.vorticity(comm, f).iter().map(|w| w / u.dt_s).collect()
+        } else {
+            Vec::new()
+        };
         let mut data = Vec::new();
         for name in &self.fields {
             let (units, components, values) = match name {
@@ -312,27 +517,35 @@ impl Output {
         }
         self.h5.write(step, u.time_si(step), &data)?;
         if self.pictures {
-            let solid: Vec<bool> = f.fluid.iter().map(|b| !b).collect();
-            let speed: Vec<f64> = velocity.chunks(2).map(|v| v[0].hypot(v[1])).collect();
-            let pics = self.dir.join("pictures");
-            let vmax = speed.iter().copied().fold(0.0, f64::max);
-            write_field_png(
-                &pics.join(format!("speed_{step:08}.png")),
-                f.nx,
-                f.ny,
-                &speed,
-                &solid,
-                Scale::Magnitude(vmax),
-            )?;
-            let wlim = robust_limit(&vorticity, &solid);
-            write_field_png(
-                &pics.join(format!("vorticity_{step:08}.png")),
-                f.nx,
-                f.ny,
-                &vorticity,
-                &solid,
-                Scale::Signed(wlim),
-            )?;
+            // Pictures are one image of the whole lattice: gathered on every rank, drawn by rank 0.
+            let speed_local: Vec<f64> = velocity.chunks(2).map(|v| v[0].hypot(v[1])).collect();
+            let mut slab = f.clone();
+            slab.ux = speed_local;
+            slab.uy = vorticity;
+            let g = sim.gather_fields(comm, &slab);
+            if self.root {
+                let solid: Vec<bool> = g.fluid.iter().map(|b| !b).collect();
+                let (speed, vort) = (&g.ux, &g.uy);
+                let pics = self.dir.join("pictures");
+                let vmax = speed.iter().copied().fold(0.0, f64::max);
+                write_field_png(
+                    &pics.join(format!("speed_{step:08}.png")),
+                    g.nx,
+                    g.ny,
+                    speed,
+                    &solid,
+                    Scale::Magnitude(vmax),
+                )?;
+                let wlim = robust_limit(vort, &solid);
+                write_field_png(
+                    &pics.join(format!("vorticity_{step:08}.png")),
+                    g.nx,
+                    g.ny,
+                    vort,
+                    &solid,
+                    Scale::Signed(wlim),
+                )?;
+            }
         }
         Ok(())
     }

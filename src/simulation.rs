@@ -1,15 +1,39 @@
 //! A simulation: the state of the physics a scene asked for, and `step()` as an ordered
-//! list of named, timed stages. A fluid-only scene holds only a lattice.
+//! list of named, timed stages. A fluid-only scene holds only a lattice (this rank's slab).
 
 use crate::analysis::flows::{taylor_green_pressure, taylor_green_velocity};
 use crate::io::probes::Series;
+use crate::lbm::fields::{Fields, Totals};
 use crate::lbm::lattice::StepError;
 use crate::lbm::{Lattice, Real};
 use crate::scene::{build_lattice, solid_id_of, Initial, Probe, SceneError, Units, ValidScene};
+use decomposition::{Comm, Side, SlabHalo, SlabPartition};
 use std::time::Instant;
 
 /// Names of the stages of one step, in execution order.
-pub const STAGES: [&str; 4] = ["collide-stream", "boundaries", "probes", "output"];
+pub const STAGES: [&str; 6] = [
+    "collide-stream",
+    "halo-wait",
+    "boundaries",
+    "probes",
+    "output",
+    "checkpoint",
+];
+/// Index of each stage in [`STAGES`].
+pub mod stage {
+    /// Fused stream–collide (halo exchange overlapped, wait excluded).
+    pub const COLLIDE_STREAM: usize = 0;
+    /// Exposed waiting for halos.
+    pub const HALO_WAIT: usize = 1;
+    /// Halo refill of local faces, inlet ramps.
+    pub const BOUNDARIES: usize = 2;
+    /// Probe sampling and reduction.
+    pub const PROBES: usize = 3;
+    /// Snapshots (fields, HDF5, pictures).
+    pub const OUTPUT: usize = 4;
+    /// Checkpoint writing.
+    pub const CHECKPOINT: usize = 5;
+}
 
 /// Accumulated wall time per stage.
 #[derive(Debug, Clone, Default)]
@@ -30,28 +54,34 @@ impl StageTimes {
 
 /// Where a probe samples.
 enum ProbeTarget {
+    /// Global cell (x, y).
     Cell(usize, usize),
     Solid(u16),
 }
 
-/// The fluid state of a run plus its probes.
+/// The fluid state of this rank's slab plus the run's probes.
 pub struct Simulation<T: Real> {
-    /// The lattice.
+    /// This rank's slab of the lattice.
     pub lattice: Lattice<T>,
     /// Derived units.
     pub units: Units,
-    /// Recorded probe series, in scene order.
+    /// How the columns are split over ranks.
+    pub partition: SlabPartition,
+    /// Recorded probe series, in scene order (identical on every rank).
     pub series: Vec<Series>,
     targets: Vec<ProbeTarget>,
     /// Longest inlet ramp (s); 0 when none.
     ramp_s: f64,
     /// Stage timers.
     pub times: StageTimes,
+    /// Exchange of the velocity columns next to rank faces (for vorticity).
+    field_halo: SlabHalo,
 }
 
 impl<T: Real> Simulation<T> {
-    /// Allocate the lattice, rasterise obstacles, apply the initial condition, place probes.
-    pub fn new(scene: &ValidScene) -> Result<Self, SceneError> {
+    /// Allocate this rank's slab, rasterise obstacles, apply the initial condition, place
+    /// probes. Columns are split over the ranks of `comm` by fluid-cell count.
+    pub fn new(scene: &ValidScene, comm: &dyn Comm) -> Result<Self, SceneError> {
         let built = build_lattice(scene)?;
         let units = scene.units;
         let invalid = |key: &str, message: String| SceneError::Invalid {
@@ -85,8 +115,23 @@ impl<T: Real> Simulation<T> {
                 }
             }
         }
-        let (nx, ny) = (built.setup.nx, built.setup.ny);
-        let mut lattice = Lattice::<T>::new(built.setup);
+        let (gnx, ny) = (built.setup.nx, built.setup.ny);
+        let costs: Vec<f64> = (0..gnx)
+            .map(|x| {
+                let fluid = (0..ny)
+                    .filter(|&y| built.setup.cells[y * gnx + x] == 0)
+                    .count();
+                fluid.max(1) as f64
+            })
+            .collect();
+        let partition = SlabPartition::weighted(&costs, comm.size()).map_err(|e| {
+            invalid(
+                "cells",
+                format!("{e}; run on fewer ranks or use a wider lattice"),
+            )
+        })?;
+        let mut lattice = Lattice::<T>::new_slab(&built.setup, &partition, comm.rank());
+        let (x0, nx) = (lattice.x_offset(), lattice.nx());
         match scene.scene.fluid.initial {
             Initial::Rest => {}
             Initial::Uniform { velocity_m_s } => {
@@ -104,10 +149,10 @@ impl<T: Real> Simulation<T> {
                 let u0 = units.velocity_to_lattice(amplitude_m_s);
                 for y in 0..ny {
                     for x in 0..nx {
-                        let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
-                        let u = taylor_green_velocity(nx, ny, u0, units.nu_lattice, 0.0, px, py);
+                        let (px, py) = ((x0 + x) as f64 + 0.5, y as f64 + 0.5);
+                        let u = taylor_green_velocity(gnx, ny, u0, units.nu_lattice, 0.0, px, py);
                         // ρ = 1 + p/c_s² (lattice units).
-                        let rho = 1.0 + 3.0 * taylor_green_pressure(nx, ny, u0, px, py);
+                        let rho = 1.0 + 3.0 * taylor_green_pressure(gnx, ny, u0, px, py);
                         lattice.set_equilibrium(x, y, rho, u);
                     }
                 }
@@ -122,16 +167,27 @@ impl<T: Real> Simulation<T> {
                 _ => 0.0,
             })
             .fold(0.0, f64::max);
+        let mut field_halo = SlabHalo::new(&partition, comm.rank(), false);
+        field_halo.set_message_bytes(ny * 9);
         let mut sim = Self {
             lattice,
             units,
+            partition,
             series,
             targets,
             ramp_s,
             times: StageTimes::default(),
+            field_halo,
         };
         sim.apply_ramp();
         Ok(sim)
+    }
+
+    /// Continue from a checkpoint: populations, step and probe series. Collective.
+    pub fn restore(&mut self, populations: &[T], step: u64, series: Vec<Series>) {
+        self.lattice.import_interior(populations, step);
+        self.series = series;
+        self.apply_ramp();
     }
 
     /// Inlet factor sin²(π t / 2T) for t < T, for the step about to be taken.
@@ -147,43 +203,167 @@ impl<T: Real> Simulation<T> {
         }
     }
 
-    /// The fluid stages of one step: collide–stream (with bounce-back and Zou–He links),
-    /// then the halo boundaries. Probes and output are driven by the caller.
-    pub fn step(&mut self) -> Result<(), StepError> {
+    /// The fluid stages of one step: collide–stream (with bounce-back and Zou–He links,
+    /// the halo exchange overlapped with the inner cells), then the local halo boundaries.
+    /// Probes and output are driven by the caller. Collective.
+    pub fn step(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
         let lat = &mut self.lattice;
-        self.times.time(0, || lat.stream_collide())?;
-        self.times.time(1, || lat.update_boundaries());
+        let wait0 = lat.halo_wait_seconds();
+        let t = Instant::now();
+        let r = lat.stream_collide(comm);
+        let waited = lat.halo_wait_seconds() - wait0;
+        self.times.seconds[stage::COLLIDE_STREAM] += t.elapsed().as_secs_f64() - waited;
+        self.times.seconds[stage::HALO_WAIT] += waited;
+        r?;
+        self.times
+            .time(stage::BOUNDARIES, || lat.update_boundaries());
         self.apply_ramp();
         Ok(())
     }
 
-    /// Stage "probes": record every probe at the current step.
-    pub fn record_probes(&mut self) {
+    /// Stage "probes": record every probe at the current step. Point probes are sampled
+    /// by the rank that owns their cell, forces are reduced in global column order; every
+    /// rank ends up with the same series. Collective.
+    pub fn record_probes(&mut self, comm: &dyn Comm) {
+        if self.targets.is_empty() {
+            return;
+        }
+        let t0 = Instant::now();
         let step = self.lattice.steps_done();
         let t = self.units.time_si(step);
-        let (lat, units, series, targets) =
-            (&self.lattice, &self.units, &mut self.series, &self.targets);
-        self.times.time(2, || {
-            for (s, target) in series.iter_mut().zip(targets) {
-                match *target {
-                    ProbeTarget::Cell(x, y) => {
-                        let (rho, u) = lat.sample(x, y);
-                        s.push(
-                            step,
-                            t,
-                            &[
-                                units.velocity_to_si(u[0]),
-                                units.velocity_to_si(u[1]),
-                                units.drho_to_pressure(rho - 1.0),
-                            ],
-                        );
-                    }
-                    ProbeTarget::Solid(id) => {
-                        let f = lat.force_on(id);
-                        s.push(step, t, &[units.force_to_si(f[0]), units.force_to_si(f[1])]);
+        let forces = if self
+            .targets
+            .iter()
+            .any(|p| matches!(p, ProbeTarget::Solid(_)))
+        {
+            self.lattice.forces(comm)
+        } else {
+            Vec::new()
+        };
+        let (x0, nx) = (self.lattice.x_offset(), self.lattice.nx());
+        let mut mine = Vec::new();
+        for target in &self.targets {
+            if let ProbeTarget::Cell(x, y) = *target {
+                if (x0..x0 + nx).contains(&x) {
+                    let (rho, u) = self.lattice.sample(x - x0, y);
+                    mine.extend([
+                        self.units.velocity_to_si(u[0]),
+                        self.units.velocity_to_si(u[1]),
+                        self.units.drho_to_pressure(rho - 1.0),
+                    ]);
+                }
+            }
+        }
+        // Owned point probes of rank 0, then rank 1, …: reassemble in scene order.
+        let all = comm.all_gather_f64(&mine);
+        let mut at = 0;
+        let mut point = vec![[0.0; 3]; self.targets.len()];
+        for r in 0..comm.size() {
+            let slab = self.partition.slab(r);
+            for (k, target) in self.targets.iter().enumerate() {
+                if let ProbeTarget::Cell(x, _) = *target {
+                    if (slab.x_begin..slab.x_end).contains(&x) {
+                        point[k].copy_from_slice(&all[at..at + 3]);
+                        at += 3;
                     }
                 }
             }
-        });
+        }
+        for (k, (s, target)) in self.series.iter_mut().zip(&self.targets).enumerate() {
+            match *target {
+                ProbeTarget::Cell(..) => s.push(step, t, &point[k]),
+                ProbeTarget::Solid(id) => {
+                    let f = forces[id as usize - 1];
+                    s.push(
+                        step,
+                        t,
+                        &[self.units.force_to_si(f[0]), self.units.force_to_si(f[1])],
+                    );
+                }
+            }
+        }
+        self.times.seconds[stage::PROBES] += t0.elapsed().as_secs_f64();
+    }
+
+    /// This slab's fields at the current step (exchanged halos refreshed first). Collective.
+    pub fn fields(&mut self, comm: &dyn Comm) -> Fields {
+        self.lattice.refresh_exchange(comm);
+        self.lattice.fields()
+    }
+
+    /// Totals over the whole lattice from this slab's `f`; same bits on any rank count.
+    /// Collective.
+    pub fn totals(&self, comm: &dyn Comm, f: &Fields) -> Totals {
+        let sums = comm.all_gather_f64(&f.column_sums());
+        Totals::from_column_sums(&sums, comm.max_f64(f.max_speed()))
+    }
+
+    /// Vorticity of this slab's `f`, using the neighbours' edge columns. Collective.
+    pub fn vorticity(&mut self, comm: &dyn Comm, f: &Fields) -> Vec<f64> {
+        let (nx, ny) = (f.nx, f.ny);
+        for (side, x) in [(Side::Left, 0), (Side::Right, nx - 1)] {
+            let out = self.field_halo.send_mut(side);
+            for y in 0..ny {
+                out[9 * y..9 * y + 8].copy_from_slice(&f.uy[y * nx + x].to_le_bytes());
+                out[9 * y + 8] = f.fluid[y * nx + x] as u8;
+            }
+        }
+        self.field_halo.exchange(comm, &mut || {});
+        let column = |side| {
+            self.field_halo.peer(side).map(|_| {
+                let data = self.field_halo.recv(side);
+                let uy: Vec<f64> = (0..ny)
+                    .map(|y| f64::from_le_bytes(data[9 * y..9 * y + 8].try_into().unwrap()))
+                    .collect();
+                let fluid: Vec<bool> = (0..ny).map(|y| data[9 * y + 8] != 0).collect();
+                (uy, fluid)
+            })
+        };
+        let (w, e) = (column(Side::Left), column(Side::Right));
+        f.vorticity_with(
+            w.as_ref().map(|(u, b)| (u.as_slice(), b.as_slice())),
+            e.as_ref().map(|(u, b)| (u.as_slice(), b.as_slice())),
+        )
+    }
+
+    /// The whole lattice's fields from every slab's `f` (for analyses and pictures).
+    /// Collective.
+    pub fn gather_fields(&self, comm: &dyn Comm, f: &Fields) -> Fields {
+        if comm.size() == 1 {
+            return f.clone();
+        }
+        let (gnx, ny) = (self.partition.columns(), f.ny);
+        let place = |all: &[f64]| -> Vec<f64> {
+            let mut out = vec![0.0; gnx * ny];
+            let mut at = 0;
+            for r in 0..comm.size() {
+                let s = self.partition.slab(r);
+                for y in 0..ny {
+                    out[y * gnx + s.x_begin..y * gnx + s.x_end]
+                        .copy_from_slice(&all[at..at + s.width()]);
+                    at += s.width();
+                }
+            }
+            out
+        };
+        let fluid_local: Vec<f64> = f.fluid.iter().map(|&b| b as u8 as f64).collect();
+        Fields {
+            nx: gnx,
+            ny,
+            rho: place(&comm.all_gather_f64(&f.rho)),
+            ux: place(&comm.all_gather_f64(&f.ux)),
+            uy: place(&comm.all_gather_f64(&f.uy)),
+            fluid: place(&comm.all_gather_f64(&fluid_local))
+                .into_iter()
+                .map(|v| v != 0.0)
+                .collect(),
+        }
+    }
+
+    /// Fluid cells of the whole lattice. Collective.
+    pub fn fluid_cells(&self, comm: &dyn Comm) -> usize {
+        let mut n = [self.lattice.fluid_cells() as f64];
+        comm.sum_f64(&mut n);
+        n[0] as usize
     }
 }

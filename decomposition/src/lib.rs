@@ -1,15 +1,20 @@
 // `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it is true for NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
-//! Domain decomposition for grainflow, with no physics in it.
+//! Domain decomposition for grainflow, with no physics in it. MPI lives only in this crate.
 //!
 //! * [`Comm`]: the small communicator interface every solver talks to. [`SingleProcess`]
-//!   implements it for one rank (unit tests, serial runs); an MPI implementation follows in
-//!   the distributed-runs work and lives only in this crate.
+//!   implements it for one rank (unit tests, serial runs); [`MpiComm`] wraps Open MPI.
 //! * [`SlabPartition`]: splits the global lattice into slabs along x, optionally weighted by
 //!   per-column cost, with owner look-ups and global ↔ local index maps.
+//! * [`SlabHalo`]: the two-face halo exchange of a slab: one contiguous buffer per
+//!   neighbour, non-blocking, with work overlapped while the messages travel.
 
 mod comm;
+mod halo;
+mod mpi_comm;
 mod slab;
 
-pub use comm::{Comm, SingleProcess};
+pub use comm::{ordered_sum, Comm, Incoming, Outgoing, SingleProcess};
+pub use halo::{Side, SlabHalo};
+pub use mpi_comm::{launched_by_mpi, MpiComm, RawComm};
 pub use slab::{PartitionError, Slab, SlabPartition};

@@ -1,9 +1,12 @@
 //! HDF5 field snapshots (`fields.h5`, one group per output step) and an XDMF sidecar
-//! (`fields.xdmf`) so ParaView opens the series directly. Serial for now; every dataset
-//! carries its units, the lattice spacing and the time as attributes.
+//! (`fields.xdmf`) so ParaView opens the series directly. Every rank writes its own block
+//! of each global dataset, collectively through MPI-IO when there are several ranks; every
+//! dataset carries its units, the lattice spacing and the time as attributes.
 
 use super::atomic::write_atomic;
+use super::h5par::{self, Access, Block};
 use super::OutputError;
+use decomposition::Comm;
 use hdf5::types::VarLenUnicode;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -23,40 +26,113 @@ pub struct FieldData<'a> {
 /// A snapshot already in the file: group name, time and (field, components).
 struct Written {
     group: String,
+    step: u64,
     time_s: f64,
     fields: Vec<(String, usize)>,
 }
 
-/// An open snapshot series.
+/// Where this rank's block lies in the global lattice.
+#[derive(Debug, Clone, Copy)]
+pub struct Layout {
+    /// Global cells along x.
+    pub nx: usize,
+    /// Global cells along y.
+    pub ny: usize,
+    /// First global column of this rank's block.
+    pub x0: usize,
+    /// Columns of this rank's block.
+    pub width: usize,
+    /// Lattice spacing (m).
+    pub dx: f64,
+}
+
+/// An open snapshot series, written collectively by every rank.
 pub struct SnapshotWriter {
     path: PathBuf,
     file: hdf5::File,
-    nx: usize,
-    ny: usize,
-    dx: f64,
+    access: Access,
+    layout: Layout,
+    compression: u8,
+    root: bool,
     written: Vec<Written>,
 }
 
 impl SnapshotWriter {
-    /// Create `dir/fields.h5` (truncating an old one) for an `nx` × `ny` lattice of spacing `dx` metres.
-    pub fn create(dir: &Path, nx: usize, ny: usize, dx: f64) -> Result<Self, OutputError> {
+    /// Open `dir/fields.h5` for a run on every rank of `comm`. Collective.
+    ///
+    /// With `resume_after = None` the file is created (truncating an old one). With
+    /// `Some(step)` (a restart) an existing file is kept: snapshots up to `step` stay,
+    /// later ones (written after the checkpoint by the run that is being redone) are removed.
+    pub fn open(
+        dir: &Path,
+        comm: &dyn Comm,
+        layout: Layout,
+        compression: u8,
+        resume_after: Option<u64>,
+    ) -> Result<Self, OutputError> {
         let path = dir.join("fields.h5");
-        let file = hdf5::File::create(&path).map_err(|source| OutputError::Hdf5 {
+        let h5 = |source| OutputError::Hdf5 {
             path: path.clone(),
             source,
-        })?;
-        Ok(Self {
-            path,
+        };
+        let resume = resume_after.filter(|_| path.exists());
+        let (file, access) = match resume {
+            Some(_) => h5par::open(&path, comm, true).map_err(h5)?,
+            None => h5par::create(&path, comm).map_err(h5)?,
+        };
+        let mut w = Self {
+            path: path.clone(),
             file,
-            nx,
-            ny,
-            dx,
+            access,
+            layout,
+            compression,
+            root: comm.is_root(),
             written: Vec::new(),
-        })
+        };
+        if let Some(last) = resume {
+            w.adopt_existing(last).map_err(h5)?;
+            if w.root {
+                w.write_xdmf()?;
+            }
+        }
+        Ok(w)
     }
 
-    /// Write the group `/step_NNNNNNNN` with the given fields, then flush the file and
-    /// rewrite the XDMF sidecar, so a crash later still leaves every earlier snapshot readable.
+    /// Keep the snapshots of steps ≤ `last`, unlink the later ones.
+    fn adopt_existing(&mut self, last: u64) -> hdf5::Result<()> {
+        let mut names = self.file.member_names()?;
+        names.sort();
+        for group in names {
+            let Some(step) = group
+                .strip_prefix("step_")
+                .and_then(|s| s.parse::<u64>().ok())
+            else {
+                continue;
+            };
+            if step > last {
+                self.file.unlink(&group)?;
+                continue;
+            }
+            let g = self.file.group(&group)?;
+            let time_s = g.attr("time_s")?.read_scalar::<f64>()?;
+            let mut fields = Vec::new();
+            for name in g.member_names()? {
+                let ds = g.dataset(&name)?;
+                fields.push((name, if ds.ndim() == 3 { ds.shape()[2] } else { 1 }));
+            }
+            self.written.push(Written {
+                group,
+                step,
+                time_s,
+                fields,
+            });
+        }
+        Ok(())
+    }
+
+    /// Write the group `/step_NNNNNNNN` with the given fields (this rank's block of
+    /// each), then flush the file and rewrite the XDMF sidecar, so a crash later still
+    /// leaves every earlier snapshot readable. Collective.
     pub fn write(
         &mut self,
         step: u64,
@@ -67,6 +143,13 @@ impl SnapshotWriter {
             path: self.path.clone(),
             source,
         };
+        let Layout {
+            nx,
+            ny,
+            x0,
+            width,
+            dx,
+        } = self.layout;
         let group_name = format!("step_{step:08}");
         let g = self.file.create_group(&group_name).map_err(h5)?;
         g.new_attr::<f64>()
@@ -79,22 +162,33 @@ impl SnapshotWriter {
             .map_err(h5)?;
         let mut names = Vec::new();
         for f in fields {
-            let shape: Vec<usize> = if f.components == 1 {
-                vec![self.ny, self.nx]
+            let (shape, block) = if f.components == 1 {
+                (
+                    vec![ny, nx],
+                    Block {
+                        start: vec![0, x0 as u64],
+                        count: vec![ny as u64, width as u64],
+                    },
+                )
             } else {
-                vec![self.ny, self.nx, f.components]
+                (
+                    vec![ny, nx, f.components],
+                    Block {
+                        start: vec![0, x0 as u64, 0],
+                        count: vec![ny as u64, width as u64, f.components as u64],
+                    },
+                )
             };
-            let mut chunk = shape.clone();
-            chunk[0] = chunk[0].min(256);
-            chunk[1] = chunk[1].min(256);
-            let ds = g
-                .new_dataset::<f64>()
-                .shape(shape.as_slice())
-                .chunk(chunk.as_slice())
-                .deflate(1)
-                .create(f.name)
-                .map_err(h5)?;
-            ds.write_raw(f.values).map_err(h5)?;
+            let builder = g.new_dataset::<f64>();
+            let mut builder = builder.shape(shape.as_slice());
+            if self.compression > 0 {
+                let mut chunk = shape.clone();
+                chunk[0] = chunk[0].min(256);
+                chunk[1] = chunk[1].min(256);
+                builder = builder.chunk(chunk.as_slice()).deflate(self.compression);
+            }
+            let ds = builder.create(f.name).map_err(h5)?;
+            h5par::write_block(&ds, &block, f.values, self.access).map_err(h5)?;
             let units: VarLenUnicode = f.units.parse().expect("ASCII units");
             ds.new_attr::<VarLenUnicode>()
                 .create("units")
@@ -102,7 +196,7 @@ impl SnapshotWriter {
                 .map_err(h5)?;
             ds.new_attr::<f64>()
                 .create("spacing_m")
-                .and_then(|a| a.write_scalar(&self.dx))
+                .and_then(|a| a.write_scalar(&dx))
                 .map_err(h5)?;
             ds.new_attr::<f64>()
                 .create("time_s")
@@ -113,20 +207,30 @@ impl SnapshotWriter {
         self.file.flush().map_err(h5)?;
         self.written.push(Written {
             group: group_name,
+            step,
             time_s,
             fields: names,
         });
-        self.write_xdmf()
+        if self.root {
+            self.write_xdmf()?;
+        }
+        Ok(())
+    }
+
+    /// Steps of the snapshots in the file, in order.
+    pub fn steps(&self) -> Vec<u64> {
+        self.written.iter().map(|w| w.step).collect()
     }
 
     /// XDMF 2 temporal collection over a 2DCoRectMesh with cell-centred attributes.
     fn write_xdmf(&self) -> Result<(), OutputError> {
-        let (nx, ny, dx) = (self.nx, self.ny, self.dx);
+        let (nx, ny, dx) = (self.layout.nx, self.layout.ny, self.layout.dx);
         let mut s = String::from("<?xml version=\"1.0\" ?>\n<Xdmf Version=\"2.0\">\n <Domain>\n  <Grid Name=\"fields\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
         for Written {
             group,
             time_s: t,
             fields: names,
+            ..
         } in &self.written
         {
             let _ = write!(

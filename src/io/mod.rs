@@ -3,7 +3,9 @@
 //! rename), so a crash never leaves half a file.
 
 pub mod atomic;
+pub mod checkpoint;
 pub mod colormap;
+pub mod h5par;
 pub mod hdf5_out;
 pub mod picture;
 pub mod probes;
@@ -28,6 +30,14 @@ pub enum OutputError {
         path: std::path::PathBuf,
         /// Cause.
         source: hdf5::Error,
+    },
+    /// A checkpoint that cannot be used for this run.
+    #[error("checkpoint {path}: {message}")]
+    Checkpoint {
+        /// File.
+        path: std::path::PathBuf,
+        /// What is wrong and how to fix it.
+        message: String,
     },
     /// PNG encoder error.
     #[error("PNG error on {path}: {message}")]

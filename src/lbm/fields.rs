@@ -39,6 +39,45 @@ pub struct Totals {
     pub max_speed: f64,
 }
 
+impl Totals {
+    /// Fold per-column sums (four per column, see [`Fields::column_sums`]) in column order.
+    pub fn from_column_sums(sums: &[f64], max_speed: f64) -> Self {
+        let mut t = Totals {
+            max_speed,
+            ..Default::default()
+        };
+        for c in sums.chunks_exact(4) {
+            t.mass += c[0];
+            t.momentum_x += c[1];
+            t.momentum_y += c[2];
+            t.kinetic_energy += c[3];
+        }
+        t
+    }
+
+    /// The five totals as an array (mass, momentum x, momentum y, kinetic energy, max speed).
+    pub fn to_array(&self) -> [f64; 5] {
+        [
+            self.mass,
+            self.momentum_x,
+            self.momentum_y,
+            self.kinetic_energy,
+            self.max_speed,
+        ]
+    }
+
+    /// Inverse of [`Totals::to_array`].
+    pub fn from_array(a: [f64; 5]) -> Self {
+        Totals {
+            mass: a[0],
+            momentum_x: a[1],
+            momentum_y: a[2],
+            kinetic_energy: a[3],
+            max_speed: a[4],
+        }
+    }
+}
+
 impl<T: Real> Lattice<T> {
     /// Pre-collision populations of interior cell (x, y) at the current time, boundary
     /// links reconstructed.
@@ -98,21 +137,78 @@ impl<T: Real> Lattice<T> {
 }
 
 impl Fields {
-    /// Conserved totals over fluid cells, summed in a fixed order.
+    /// Conserved totals over fluid cells: per column (south to north), then over columns
+    /// (west to east). Use [`Totals::from_column_sums`] on the concatenated
+    /// [`Fields::column_sums`] of every slab to get the same bits on any number of ranks.
     pub fn totals(&self) -> Totals {
-        let mut t = Totals::default();
-        for k in 0..self.rho.len() {
-            if !self.fluid[k] {
-                continue;
+        Totals::from_column_sums(&self.column_sums(), self.max_speed())
+    }
+
+    /// Per column: Σρ, Σρu_x, Σρu_y, Σ½ρ|u|² over its fluid cells, summed south to north;
+    /// four values per column, west to east.
+    pub fn column_sums(&self) -> Vec<f64> {
+        let mut out = vec![0.0; 4 * self.nx];
+        for y in 0..self.ny {
+            for x in 0..self.nx {
+                let k = y * self.nx + x;
+                if !self.fluid[k] {
+                    continue;
+                }
+                let (r, u, v) = (self.rho[k], self.ux[k], self.uy[k]);
+                let c = &mut out[4 * x..4 * x + 4];
+                c[0] += r;
+                c[1] += r * u;
+                c[2] += r * v;
+                c[3] += 0.5 * r * (u * u + v * v);
             }
-            let (r, u, v) = (self.rho[k], self.ux[k], self.uy[k]);
-            t.mass += r;
-            t.momentum_x += r * u;
-            t.momentum_y += r * v;
-            t.kinetic_energy += 0.5 * r * (u * u + v * v);
-            t.max_speed = t.max_speed.max((u * u + v * v).sqrt());
         }
-        t
+        out
+    }
+
+    /// Largest |u| over fluid cells.
+    pub fn max_speed(&self) -> f64 {
+        (0..self.rho.len())
+            .filter(|&k| self.fluid[k])
+            .map(|k| (self.ux[k] * self.ux[k] + self.uy[k] * self.uy[k]).sqrt())
+            .fold(0.0, f64::max)
+    }
+
+    /// Vorticity of a slab whose neighbour columns are known: `west`/`east` hold the
+    /// u_y and fluid flags of the column just outside it (None at the domain edge). Gives
+    /// the same bits as [`Fields::vorticity`] of the whole lattice.
+    pub fn vorticity_with(
+        &self,
+        west: Option<(&[f64], &[bool])>,
+        east: Option<(&[f64], &[bool])>,
+    ) -> Vec<f64> {
+        let (l, r) = (west.is_some() as usize, east.is_some() as usize);
+        let (nx, ny, wide) = (self.nx, self.ny, self.nx + l + r);
+        let mut ext = Fields {
+            nx: wide,
+            ny,
+            rho: vec![1.0; wide * ny],
+            ux: vec![0.0; wide * ny],
+            uy: vec![0.0; wide * ny],
+            fluid: vec![false; wide * ny],
+        };
+        for y in 0..ny {
+            let (d, s) = (y * wide + l, y * nx);
+            ext.ux[d..d + nx].copy_from_slice(&self.ux[s..s + nx]);
+            ext.uy[d..d + nx].copy_from_slice(&self.uy[s..s + nx]);
+            ext.fluid[d..d + nx].copy_from_slice(&self.fluid[s..s + nx]);
+            if let Some((uy, fl)) = west {
+                ext.uy[y * wide] = uy[y];
+                ext.fluid[y * wide] = fl[y];
+            }
+            if let Some((uy, fl)) = east {
+                ext.uy[y * wide + wide - 1] = uy[y];
+                ext.fluid[y * wide + wide - 1] = fl[y];
+            }
+        }
+        let w = ext.vorticity();
+        (0..ny)
+            .flat_map(|y| w[y * wide + l..y * wide + l + nx].to_vec())
+            .collect()
     }
 
     /// Vorticity ω = ∂u_y/∂x − ∂u_x/∂y by central differences (one-sided next to solids

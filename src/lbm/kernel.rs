@@ -2,13 +2,15 @@
 
 use super::collision::{family, Collider, Collision, MomentCollider};
 use super::d2q9::{CX, CY, Q};
+use super::forces::reduce_forces;
 use super::lanes::Lanes;
-use super::lattice::{Lattice, StepError};
+use super::lattice::{Lattice, StepError, HALO_DIRS};
 use super::real::Real;
+use decomposition::{Comm, Side, SingleProcess};
 use rayon::prelude::*;
 
 /// A raw pointer that rayon tasks may share. Each row task writes only its own row of the
-/// destination buffer, so the writes never overlap.
+/// destination buffer (and its own force slots), so the writes never overlap.
 #[derive(Clone, Copy)]
 struct RowWriter<T>(*mut T);
 // SAFETY: the pointer targets the destination buffer, which outlives the sweep; tasks
@@ -16,33 +18,155 @@ struct RowWriter<T>(*mut T);
 unsafe impl<T> Send for RowWriter<T> {}
 unsafe impl<T> Sync for RowWriter<T> {}
 
+impl<T> RowWriter<T> {
+    /// The pointer (a method, so closures capture the whole `Send` wrapper).
+    #[inline(always)]
+    fn ptr(&self) -> *mut T {
+        self.0
+    }
+}
+
+/// Which cells a sweep covers.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Part {
+    /// Bulk and special cells: everything that does not read an exchanged halo.
+    Inner,
+    /// Cells next to an exchanged face, after the halo has arrived.
+    Edge,
+}
+
+/// Populations that leave through the west face (c_x = −1) and the east face (c_x = +1).
+const WESTWARD: [usize; HALO_DIRS] = [3, 6, 7];
+const EASTWARD: [usize; HALO_DIRS] = [1, 5, 8];
+
 impl<T: Real> Lattice<T> {
-    /// Advance one time step: [`Lattice::stream_collide`] then [`Lattice::update_boundaries`].
+    /// Advance one time step on a lattice that owns the whole domain.
     pub fn step(&mut self) -> Result<(), StepError> {
-        self.stream_collide()?;
+        self.step_with(&SingleProcess)
+    }
+
+    /// Advance one time step: [`Lattice::stream_collide`] then [`Lattice::update_boundaries`].
+    pub fn step_with(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
+        self.stream_collide(comm)?;
         self.update_boundaries();
         Ok(())
     }
 
-    /// Fused stream–collide into the other buffer and swap; bounce-back and Zou–He links are
-    /// reconstructed inside the sweep, and the momentum exchanged with each solid is summed
-    /// (available from [`Lattice::force_on`]).
+    /// Fused stream–collide into the other buffer and swap. Bounce-back and Zou–He links
+    /// are reconstructed inside the sweep, and the momentum exchanged with each solid is
+    /// stored per cell (see [`Lattice::forces`]). On a slab, the x halos are exchanged
+    /// while the inner cells are computed; the cells next to the exchanged faces follow
+    /// once the halos have arrived. Collective when the slab has neighbours.
     ///
-    /// Errors when a fluid cell's density becomes NaN or non-positive; the lattice then
-    /// still holds the last good state.
-    pub fn stream_collide(&mut self) -> Result<(), StepError> {
+    /// Errors when a fluid cell's density becomes NaN or non-positive on any rank; every
+    /// rank then still holds the last good state.
+    pub fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
         if self.step == 0 {
             self.fill_halo();
         }
+        self.pack_halo();
+        let mut halo = std::mem::take(&mut self.halo);
+        let waited = halo.exchange(comm, &mut || self.sweep_part(Part::Inner));
+        self.halo = halo;
+        self.halo_wait_s += waited;
+        if self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some() {
+            self.unpack_halo();
+            self.sweep_part(Part::Edge);
+        }
+        let bad_row = self.row_bad.iter().position(|&b| b != 0);
+        if comm.size() > 1 {
+            if comm.any(bad_row.is_some()) {
+                return Err(self.agree_on_instability(comm, bad_row));
+            }
+        } else if let Some(y) = bad_row {
+            return Err(self.locate_instability(y));
+        }
+        self.step += 1;
+        self.cur ^= 1;
+        Ok(())
+    }
+
+    /// Total momentum-exchange force (lattice units) on every solid during the last step,
+    /// indexed by solid id − 1; the same bits on any number of ranks. Collective.
+    pub fn forces(&self, comm: &dyn Comm) -> Vec<[f64; 2]> {
+        reduce_forces(comm, &self.forces)
+    }
+
+    /// Refill the halo from the interior (periodic, free-slip, outflow faces) so the next
+    /// sweep and any field read-out see the boundary values. Exchanged faces are refilled
+    /// by the next [`Lattice::stream_collide`] or by [`Lattice::refresh_exchange`].
+    pub fn update_boundaries(&mut self) {
+        self.fill_halo();
+    }
+
+    /// Fill the exchanged x halos of the current buffer now (before reading fields on a
+    /// slab). Collective when the slab has neighbours.
+    pub fn refresh_exchange(&mut self, comm: &dyn Comm) {
+        self.pack_halo();
+        let mut halo = std::mem::take(&mut self.halo);
+        self.halo_wait_s += halo.exchange(comm, &mut || {});
+        self.halo = halo;
+        if self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some() {
+            self.unpack_halo();
+        }
+    }
+
+    /// Copy the populations that leave each exchanged face (3 of 9, the full padded
+    /// column including its y-halo rows, which makes the corners right) into the send buffers.
+    fn pack_halo(&mut self) {
+        let (nx, stride, plane, rows) = (self.nx, self.stride, self.plane, self.ny + 2);
+        let src = &self.buf[self.cur];
+        for (side, xp, dirs) in [(Side::Left, 1, WESTWARD), (Side::Right, nx, EASTWARD)] {
+            if self.halo.peer(side).is_none() {
+                continue;
+            }
+            let out = self.halo.send_mut(side);
+            let mut at = 0;
+            for i in dirs {
+                for yp in 0..rows {
+                    src[i * plane + yp * stride + xp].put_le(&mut out[at..]);
+                    at += T::BYTES;
+                }
+            }
+        }
+    }
+
+    /// Write the received columns into the exchanged x halos of the current buffer.
+    fn unpack_halo(&mut self) {
+        let (nx, stride, plane, rows) = (self.nx, self.stride, self.plane, self.ny + 2);
+        let dst = &mut self.buf[self.cur];
+        for (side, xp, dirs) in [(Side::Left, 0, EASTWARD), (Side::Right, nx + 1, WESTWARD)] {
+            if self.halo.peer(side).is_none() {
+                continue;
+            }
+            let data = self.halo.recv(side);
+            let mut at = 0;
+            for i in dirs {
+                for yp in 0..rows {
+                    dst[i * plane + yp * stride + xp] = T::get_le(&data[at..]);
+                    at += T::BYTES;
+                }
+            }
+        }
+    }
+
+    /// One parallel pass over the rows, for the cells of `part`.
+    fn sweep_part(&mut self, part: Part) {
         let p = self.params;
         let forced = p.force[0] != T::default() || p.force[1] != T::default();
         macro_rules! dispatch {
             ($fam:expr) => {
                 match (self.smagorinsky, forced) {
-                    (false, false) => self.sweep(&MomentCollider::<T, false, { $fam }, false>(p)),
-                    (false, true) => self.sweep(&MomentCollider::<T, false, { $fam }, true>(p)),
-                    (true, false) => self.sweep(&MomentCollider::<T, true, { $fam }, false>(p)),
-                    (true, true) => self.sweep(&MomentCollider::<T, true, { $fam }, true>(p)),
+                    (false, false) => {
+                        self.sweep(&MomentCollider::<T, false, { $fam }, false>(p), part)
+                    }
+                    (false, true) => {
+                        self.sweep(&MomentCollider::<T, false, { $fam }, true>(p), part)
+                    }
+                    (true, false) => {
+                        self.sweep(&MomentCollider::<T, true, { $fam }, false>(p), part)
+                    }
+                    (true, true) => self.sweep(&MomentCollider::<T, true, { $fam }, true>(p), part),
                 }
             };
         }
@@ -51,68 +175,56 @@ impl<T: Real> Lattice<T> {
             Collision::Trt { .. } => dispatch!(family::TRT),
             Collision::Mrt { .. } => dispatch!(family::MRT),
         }
-        if let Some(y) = self.row_bad.iter().position(|&b| b != 0) {
-            return Err(self.locate_instability(y));
-        }
-        self.step += 1;
-        self.cur ^= 1;
-        // Deterministic reduction: rows in order, whatever the thread count.
-        let ns = self.solids.len();
-        for s in 0..ns {
-            let mut acc = [0.0; 2];
-            for y in 0..self.ny {
-                let f = self.row_force[y * ns + s];
-                acc[0] += f[0];
-                acc[1] += f[1];
-            }
-            self.force_on[s] = acc;
-        }
-        Ok(())
     }
 
-    /// Refill the halo from the interior (periodic, free-slip, outflow faces) so the next
-    /// sweep and any field read-out see the boundary values.
-    pub fn update_boundaries(&mut self) {
-        self.fill_halo();
-    }
-
-    /// One parallel pass over all rows.
-    fn sweep<C: Collider<T>>(&mut self, c: &C) {
+    /// One parallel pass over all rows for the cells of `part`.
+    fn sweep<C: Collider<T>>(&mut self, c: &C, part: Part) {
         let mut dst = std::mem::take(&mut self.buf[self.cur ^ 1]);
         let writer = RowWriter(dst.as_mut_ptr());
-        let ns = self.solids.len().max(1);
+        let ns = self.forces.solids();
+        let mut slot_values = std::mem::take(&mut self.forces.values);
+        let slots = RowWriter(slot_values.as_mut_ptr());
         let mut row_bad = std::mem::take(&mut self.row_bad);
-        let mut row_force = std::mem::take(&mut self.row_force);
         let this = &*self;
         let src = &this.buf[this.cur];
+        let min_len = if part == Part::Inner { 4 } else { 64 };
         row_bad
             .par_iter_mut()
-            .zip(row_force.par_chunks_mut(ns))
             .enumerate()
-            .with_min_len(4)
-            .for_each(|(y, (bad, forces))| {
-                forces.fill([0.0; 2]);
+            .with_min_len(min_len)
+            .for_each(|(y, bad)| {
                 let yp = y + 1;
                 let row = &this.plan[y];
                 let mut b = false;
-                for &(x0, x1) in &row.bulk {
-                    // SAFETY: row yp of the destination is written by this task only.
-                    // 8 lanes: one AVX register of f32, one 64-byte line of f64 (streamed).
-                    b |= unsafe {
-                        bulk_run::<T, C, 8>(
-                            c,
-                            src,
-                            writer,
-                            this.plane,
-                            this.stride,
-                            yp,
-                            x0 as usize,
-                            x1 as usize,
-                        )
+                let (cells, first_slot) = match part {
+                    Part::Inner => {
+                        for &(x0, x1) in &row.bulk {
+                            // SAFETY: row yp of the destination is written by this task only.
+                            // 8 lanes: one AVX register of f32, one 64-byte line of f64 (streamed).
+                            b |= unsafe {
+                                bulk_run::<T, C, 8>(
+                                    c,
+                                    src,
+                                    writer,
+                                    this.plane,
+                                    this.stride,
+                                    yp,
+                                    x0 as usize,
+                                    x1 as usize,
+                                )
+                            };
+                        }
+                        (&row.special, this.forces.row_start[y])
+                    }
+                    Part::Edge => (&row.edge, this.forces.row_start[y] + row.special.len()),
+                };
+                for (j, &x) in cells.iter().enumerate() {
+                    // SAFETY: the slots of this row's cells belong to this task only.
+                    let f = unsafe {
+                        std::slice::from_raw_parts_mut(slots.ptr().add((first_slot + j) * ns), ns)
                     };
-                }
-                for &x in &row.special {
-                    let mut h = this.gather_special(src, x as usize, y, Some(forces));
+                    f.fill([0.0; 2]);
+                    let mut h = this.gather_special(src, x as usize, y, Some(f));
                     let m = c.collide(&mut h);
                     let k = yp * this.stride + x as usize + 1;
                     for (i, hi) in h.iter().enumerate() {
@@ -122,11 +234,29 @@ impl<T: Real> Lattice<T> {
                     b |= !(m.rho > T::default());
                 }
                 store_fence();
-                *bad = b as u8;
+                match part {
+                    Part::Inner => *bad = b as u8,
+                    Part::Edge => *bad |= b as u8,
+                }
             });
         self.row_bad = row_bad;
-        self.row_force = row_force;
+        self.forces.values = slot_values;
         self.buf[self.cur ^ 1] = dst;
+    }
+
+    /// The first bad cell over all ranks (rank order), known to every rank. Collective.
+    fn agree_on_instability(&self, comm: &dyn Comm, bad_row: Option<usize>) -> StepError {
+        let mine = match bad_row.map(|y| self.locate_instability(y)) {
+            Some(e) => vec![e.x as f64, e.y as f64, e.density],
+            None => Vec::new(),
+        };
+        let all = comm.all_gather_f64(&mine);
+        StepError {
+            step: self.step,
+            x: all[0] as usize,
+            y: all[1] as usize,
+            density: all[2],
+        }
     }
 
     /// Find the first bad cell of row `y` in the freshly written buffer.
@@ -149,7 +279,7 @@ impl<T: Real> Lattice<T> {
         }
         StepError {
             step: self.step,
-            x: worst.0,
+            x: self.x0 + worst.0,
             y,
             density: worst.1,
         }

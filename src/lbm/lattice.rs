@@ -3,7 +3,9 @@
 use super::aligned::AlignedBuf;
 use super::collision::{equilibrium, Collision, CollisionParams, Moments};
 use super::d2q9::{CX, CY, Q};
+use super::forces::ForceSlots;
 use super::real::Real;
+use decomposition::{Side, SlabHalo, SlabPartition};
 use thiserror::Error;
 
 /// Cell type code for fluid (including halo cells filled by copies: periodic, free-slip, outflow).
@@ -71,6 +73,9 @@ pub enum FaceCondition {
     Velocity(Vec<[f64; 2]>),
     /// Zou–He pressure, as density deviation ρ − 1.
     Pressure(f64),
+    /// A face shared with another rank (or with oneself across a periodic wrap on several
+    /// ranks): its halo is filled by the halo exchange, never by the lattice itself.
+    Exchange,
 }
 
 impl FaceCondition {
@@ -136,12 +141,19 @@ pub(crate) struct RowPlan {
     pub bulk: Vec<(u32, u32)>,
     /// Fluid cells needing bounce-back or open-boundary reconstruction.
     pub special: Vec<u32>,
+    /// Fluid cells next to an exchanged face: computed after the halo has arrived.
+    pub edge: Vec<u32>,
 }
 
 /// The D2Q9 lattice of one rank: two SoA buffers of shifted populations plus geometry.
 pub struct Lattice<T: Real> {
+    /// Local columns (the slab width).
     pub(crate) nx: usize,
     pub(crate) ny: usize,
+    /// Global column of local column 0.
+    pub(crate) x0: usize,
+    /// Global columns.
+    pub(crate) global_nx: usize,
     pub(crate) stride: usize,
     pub(crate) plane: usize,
     pub(crate) buf: [AlignedBuf<T>; 2],
@@ -153,75 +165,134 @@ pub struct Lattice<T: Real> {
     pub(crate) collision: Collision,
     pub(crate) smagorinsky: bool,
     pub(crate) params: CollisionParams<T>,
-    /// Per-row momentum-exchange force on each solid (rows × solids), reduced in row order.
-    pub(crate) row_force: Vec<[f64; 2]>,
+    /// Momentum exchanged by each special cell with each solid during the last step.
+    pub(crate) forces: ForceSlots,
     pub(crate) row_bad: Vec<u8>,
-    pub(crate) force_on: Vec<[f64; 2]>,
     pub(crate) step: u64,
     /// Factor applied to every Zou–He velocity face (start-up ramps).
     pub(crate) inlet_scale: f64,
+    /// Neighbours and buffers of the x-face halo exchange (no peers on one rank).
+    pub(crate) halo: SlabHalo,
+    /// Seconds spent waiting for halos, accumulated.
+    pub(crate) halo_wait_s: f64,
+}
+
+/// Populations that cross one x face: 3 of the 9.
+pub(crate) const HALO_DIRS: usize = 3;
+
+/// Cell types of the global lattice with its one-cell halo, row-major over the padded
+/// `(nx + 2) × (ny + 2)` grid. Periodic halos take the type of the cell they wrap to
+/// (so a solid touching a periodic face is bounced back from across it); walls take
+/// their solid id, open faces their code; a corner next to a periodic face wraps too.
+pub(crate) fn padded_types(setup: &LatticeSetup) -> Vec<u16> {
+    let (nx, ny) = (setup.nx, setup.ny);
+    let stride = nx + 2;
+    let mut types = vec![FLUID; stride * (ny + 2)];
+    for y in 0..ny {
+        types[(y + 1) * stride + 1..(y + 1) * stride + 1 + nx]
+            .copy_from_slice(&setup.cells[y * nx..(y + 1) * nx]);
+    }
+    let [w, e, s, n] = &setup.faces;
+    let code = |f: &FaceCondition, face: Face| match f {
+        FaceCondition::Wall { solid } => Some(*solid),
+        f if f.is_open() => Some(face.open_code()),
+        FaceCondition::Periodic => None,
+        _ => Some(FLUID),
+    };
+    for yp in 1..=ny {
+        types[yp * stride] = code(w, Face::West).unwrap_or(types[yp * stride + nx]);
+        types[yp * stride + nx + 1] = code(e, Face::East).unwrap_or(types[yp * stride + 1]);
+    }
+    for xp in 1..=nx {
+        types[xp] = code(s, Face::South).unwrap_or(types[ny * stride + xp]);
+        types[(ny + 1) * stride + xp] = code(n, Face::North).unwrap_or(types[stride + xp]);
+    }
+    for (xp, yp, fx, fy) in [
+        (0, 0, (w, Face::West), (s, Face::South)),
+        (nx + 1, 0, (e, Face::East), (s, Face::South)),
+        (0, ny + 1, (w, Face::West), (n, Face::North)),
+        (nx + 1, ny + 1, (e, Face::East), (n, Face::North)),
+    ] {
+        let wrap_y = if yp == 0 { ny } else { 1 };
+        let wrap_x = if xp == 0 { nx } else { 1 };
+        types[yp * stride + xp] = match (fx.0, fy.0) {
+            (_, FaceCondition::Periodic) => types[wrap_y * stride + xp],
+            (FaceCondition::Periodic, _) => types[yp * stride + wrap_x],
+            (_, FaceCondition::Wall { solid }) | (FaceCondition::Wall { solid }, _) => *solid,
+            (a, b) if a.is_open() && b.is_open() => OPEN_CORNER,
+            (a, _) if a.is_open() => fx.1.open_code(),
+            (_, b) if b.is_open() => fy.1.open_code(),
+            _ => FLUID,
+        };
+    }
+    types
 }
 
 impl<T: Real> Lattice<T> {
-    /// Build a lattice at rest (ρ = 1, u = 0). Precondition: `setup` was validated by the
-    /// scene layer (sizes match, periodic faces paired, solid ids in range).
+    /// Build a one-rank lattice at rest (ρ = 1, u = 0). Precondition: `setup` was validated
+    /// by the scene layer (sizes match, periodic faces paired, solid ids in range).
     pub fn new(setup: LatticeSetup) -> Self {
-        let (nx, ny) = (setup.nx, setup.ny);
-        assert_eq!(setup.cells.len(), nx * ny, "cell array size");
+        let partition = SlabPartition::uniform(setup.nx, 1).expect("nx ≥ 1");
+        Self::new_slab(&setup, &partition, 0)
+    }
+
+    /// Build the slab of `rank` in `partition` of the global lattice `setup`, at rest.
+    /// Its x halo columns hold the neighbours' cell types, so bounce-back against a solid
+    /// on the other side of a rank face is the same as on one rank; faces shared with
+    /// another rank become [`FaceCondition::Exchange`].
+    pub fn new_slab(setup: &LatticeSetup, partition: &SlabPartition, rank: usize) -> Self {
+        let (gnx, ny) = (setup.nx, setup.ny);
+        assert_eq!(setup.cells.len(), gnx * ny, "cell array size");
+        let slab = partition.slab(rank);
+        let (x0, nx) = (slab.x_begin, slab.width());
+        let ranks = partition.ranks();
+        let periodic_x = setup.faces[Face::West as usize] == FaceCondition::Periodic;
+        let halo = SlabHalo::new(partition, rank, periodic_x && ranks > 1);
         let stride = nx + 2;
         // Planes padded to 16 values: every plane then has the same 64-byte alignment phase,
         // which the non-temporal stores of the bulk kernel rely on.
         let plane = (stride * (ny + 2)).div_ceil(16) * 16;
+        let global = padded_types(setup);
         let mut types = vec![FLUID; plane];
-        for y in 0..ny {
-            for x in 0..nx {
-                types[(y + 1) * stride + x + 1] = setup.cells[y * nx + x];
+        for yp in 0..ny + 2 {
+            let src = yp * (gnx + 2) + x0;
+            types[yp * stride..(yp + 1) * stride].copy_from_slice(&global[src..src + stride]);
+        }
+        let mut faces = setup.faces.clone();
+        for (side, face) in [(Side::Left, Face::West), (Side::Right, Face::East)] {
+            if halo.peer(side).is_some() {
+                faces[face as usize] = FaceCondition::Exchange;
             }
         }
-        let halo_code = |f: &FaceCondition, face: Face| match f {
-            FaceCondition::Wall { solid } => *solid,
-            f if f.is_open() => face.open_code(),
-            _ => FLUID,
-        };
-        let [w, e, s, n] = &setup.faces;
-        for yp in 1..=ny {
-            types[yp * stride] = halo_code(w, Face::West);
-            types[yp * stride + nx + 1] = halo_code(e, Face::East);
+        for face in [Face::South, Face::North] {
+            if let FaceCondition::Velocity(v) = &mut faces[face as usize] {
+                *v = v[x0..x0 + nx].to_vec();
+            }
         }
-        for xp in 1..=nx {
-            types[xp] = halo_code(s, Face::South);
-            types[(ny + 1) * stride + xp] = halo_code(n, Face::North);
-        }
-        for (xp, yp, fx, fy) in [
-            (0, 0, (w, Face::West), (s, Face::South)),
-            (nx + 1, 0, (e, Face::East), (s, Face::South)),
-            (0, ny + 1, (w, Face::West), (n, Face::North)),
-            (nx + 1, ny + 1, (e, Face::East), (n, Face::North)),
-        ] {
-            let code = match (fx.0, fy.0) {
-                (_, FaceCondition::Wall { solid }) | (FaceCondition::Wall { solid }, _) => *solid,
-                (a, b) if a.is_open() && b.is_open() => OPEN_CORNER,
-                (a, _) if a.is_open() => fx.1.open_code(),
-                (_, b) if b.is_open() => fy.1.open_code(),
-                _ => FLUID,
-            };
-            types[yp * stride + xp] = code;
-        }
-        let plan = (0..ny).map(|y| row_plan(&types, stride, nx, y)).collect();
+        let exchange =
+            [Face::West, Face::East].map(|f| faces[f as usize] == FaceCondition::Exchange);
+        let plan: Vec<RowPlan> = (0..ny)
+            .map(|y| row_plan(&types, stride, nx, y, exchange))
+            .collect();
+        let ns = setup.solids.len();
+        let forces = ForceSlots::new(&plan, nx, ns);
         // Rest state: h = f − w = 0 everywhere.
         let buf = [AlignedBuf::zeros(Q * plane), AlignedBuf::zeros(Q * plane)];
-        let ns = setup.solids.len();
+        let mut halo = halo;
+        halo.set_message_bytes(HALO_DIRS * (ny + 2) * T::BYTES);
         Self {
             nx,
             ny,
+            x0,
+            global_nx: gnx,
             stride,
             plane,
             buf,
             cur: 0,
             types,
             plan,
-            faces: setup.faces,
-            solids: setup.solids,
+            faces,
+            solids: setup.solids.clone(),
             collision: setup.collision,
             smagorinsky: setup.smagorinsky.is_some(),
             params: CollisionParams::new(
@@ -230,17 +301,34 @@ impl<T: Real> Lattice<T> {
                 setup.smagorinsky,
                 setup.force,
             ),
-            row_force: vec![[0.0; 2]; ny * ns.max(1)],
+            forces,
             row_bad: vec![0; ny],
-            force_on: vec![[0.0; 2]; ns],
             step: 0,
             inlet_scale: 1.0,
+            halo,
+            halo_wait_s: 0.0,
         }
     }
 
-    /// Cells along x.
+    /// Cells along x in this slab (the whole lattice on one rank).
     pub fn nx(&self) -> usize {
         self.nx
+    }
+    /// Global column of this slab's column 0.
+    pub fn x_offset(&self) -> usize {
+        self.x0
+    }
+    /// Cells along x in the whole lattice.
+    pub fn global_nx(&self) -> usize {
+        self.global_nx
+    }
+    /// Seconds spent waiting for halos so far (exposed communication).
+    pub fn halo_wait_seconds(&self) -> f64 {
+        self.halo_wait_s
+    }
+    /// Halo bytes this rank sends per step.
+    pub fn halo_bytes_per_step(&self) -> u64 {
+        self.halo.bytes_per_exchange()
     }
     /// Cells along y.
     pub fn ny(&self) -> usize {
@@ -264,10 +352,6 @@ impl<T: Real> Lattice<T> {
             .map(|y| (0..self.nx).filter(|&x| self.is_fluid(x, y)).count())
             .sum()
     }
-    /// Momentum-exchange force (lattice units) on solid `id` during the last step.
-    pub fn force_on(&self, id: u16) -> [f64; 2] {
-        self.force_on[id as usize - 1]
-    }
     /// Scale every velocity face by `factor` from the next step on (start-up ramps).
     pub fn set_inlet_scale(&mut self, factor: f64) {
         self.inlet_scale = factor;
@@ -281,6 +365,38 @@ impl<T: Real> Lattice<T> {
     #[inline(always)]
     pub(crate) fn idx(&self, x: isize, y: isize) -> usize {
         ((y + 1) as usize) * self.stride + (x + 1) as usize
+    }
+
+    /// This slab's interior populations (shifted, h = f − w), `[9][ny][nx]` row-major:
+    /// the whole fluid state, for checkpoints.
+    pub fn export_interior(&self) -> Vec<T> {
+        let src = &self.buf[self.cur];
+        let mut out = Vec::with_capacity(Q * self.ny * self.nx);
+        for i in 0..Q {
+            for y in 0..self.ny {
+                let k = i * self.plane + self.idx(0, y as isize);
+                out.extend_from_slice(&src[k..k + self.nx]);
+            }
+        }
+        out
+    }
+
+    /// Replace the state with `data` (as from [`Lattice::export_interior`]) after `step`
+    /// steps, in both buffers, and refill the local halos. Exchanged halos are filled by
+    /// the next step or [`Lattice::refresh_exchange`].
+    pub fn import_interior(&mut self, data: &[T], step: u64) {
+        assert_eq!(data.len(), Q * self.ny * self.nx, "checkpoint block size");
+        for b in 0..2 {
+            for i in 0..Q {
+                for y in 0..self.ny {
+                    let k = i * self.plane + self.idx(0, y as isize);
+                    let from = (i * self.ny + y) * self.nx;
+                    self.buf[b][k..k + self.nx].copy_from_slice(&data[from..from + self.nx]);
+                }
+            }
+        }
+        self.step = step;
+        self.fill_halo();
     }
 
     /// Overwrite interior cell (x, y) with the equilibrium of (ρ, u) in both buffers.
@@ -309,14 +425,19 @@ pub(crate) fn is_plain(types: &[u16], stride: usize, k: usize) -> bool {
     })
 }
 
-/// Classify one interior row into bulk runs and special cells.
-fn row_plan(types: &[u16], stride: usize, nx: usize, y: usize) -> RowPlan {
+/// Classify one interior row into bulk runs, special cells and edge cells (those next to
+/// a face in `exchange` = [west, east]).
+fn row_plan(types: &[u16], stride: usize, nx: usize, y: usize, exchange: [bool; 2]) -> RowPlan {
     let yp = y + 1;
     let mut plan = RowPlan::default();
     let mut run_start: Option<u32> = None;
     for x in 0..nx {
         let k = yp * stride + x + 1;
-        let fluid = types[k] == FLUID;
+        let edge = (x == 0 && exchange[0]) || (x + 1 == nx && exchange[1]);
+        if types[k] == FLUID && edge {
+            plan.edge.push(x as u32);
+        }
+        let fluid = types[k] == FLUID && !edge;
         let plain = fluid && is_plain(types, stride, k);
         match (plain, run_start) {
             (true, None) => run_start = Some(x as u32),

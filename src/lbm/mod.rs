@@ -12,6 +12,7 @@ pub mod boundary;
 pub mod collision;
 pub mod d2q9;
 pub mod fields;
+mod forces;
 pub mod geometry;
 pub mod kernel;
 pub mod lanes;

@@ -31,6 +31,10 @@ pub trait Real:
     fn to_f64(self) -> f64;
     /// Square root.
     fn sqrt(self) -> Self;
+    /// Write the little-endian bytes of `self` into `out[..BYTES]` (halo and checkpoint buffers).
+    fn put_le(self, out: &mut [u8]);
+    /// Read a value from the little-endian bytes `b[..BYTES]`.
+    fn get_le(b: &[u8]) -> Self;
     /// Fused or plain multiply-add `self * a + b`.
     #[inline(always)]
     fn mul_add_(self, a: Self, b: Self) -> Self {
@@ -54,6 +58,14 @@ macro_rules! impl_real {
             #[inline(always)]
             fn sqrt(self) -> Self {
                 <$t>::sqrt(self)
+            }
+            #[inline(always)]
+            fn put_le(self, out: &mut [u8]) {
+                out[..Self::BYTES].copy_from_slice(&self.to_le_bytes());
+            }
+            #[inline(always)]
+            fn get_le(b: &[u8]) -> Self {
+                <$t>::from_le_bytes(b[..Self::BYTES].try_into().expect("BYTES long"))
             }
         }
     };

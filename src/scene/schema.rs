@@ -275,6 +275,23 @@ pub struct Run {
     /// Record probes every this many steps.
     #[serde(default = "default_one")]
     pub probe_every: u64,
+    /// Deflate level of snapshot datasets, 0 (off, fastest) to 9.
+    #[serde(default = "default_one_u8")]
+    pub compression: u8,
+    /// Write `checkpoint.h5` every this many steps; 0 = never (it is still written on
+    /// SIGTERM/SIGUSR1 and at the end when `checkpoint_at_end`).
+    #[serde(default)]
+    pub checkpoint_every: u64,
+    /// Also write a checkpoint every this many minutes of wall-clock time; 0 = never.
+    #[serde(default)]
+    pub checkpoint_minutes: f64,
+    /// Write a checkpoint after the last step.
+    #[serde(default)]
+    pub checkpoint_at_end: bool,
+}
+
+fn default_one_u8() -> u8 {
+    1
 }
 
 fn default_fields() -> Vec<FieldName> {

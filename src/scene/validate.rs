@@ -364,6 +364,20 @@ fn validate_run(s: &Scene, ctx: &Context, units: &Units) -> Result<(), SceneErro
     if r.probe_every == 0 {
         return Err(ctx.err("probe_every", 0, "probe_every must be at least 1"));
     }
+    if r.compression > 9 {
+        return Err(ctx.err(
+            "compression",
+            0,
+            "compression is a deflate level from 0 (off) to 9; use 1 for a good speed/size balance",
+        ));
+    }
+    if !(r.checkpoint_minutes >= 0.0 && r.checkpoint_minutes.is_finite()) {
+        return Err(ctx.err(
+            "checkpoint_minutes",
+            0,
+            "checkpoint_minutes must be a finite number ≥ 0 (0 turns wall-clock checkpoints off)",
+        ));
+    }
     Ok(())
 }
 

@@ -36,6 +36,7 @@ fn run_valid(
         precision,
         steps: None,
         progress: false,
+        restart: None,
     };
     let s = run(scene, &opts).unwrap_or_else(|e| panic!("{e}"));
     (s, out)

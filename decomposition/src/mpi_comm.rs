@@ -1,0 +1,136 @@
+//! The Open MPI communicator (rsmpi). MPI is called from the main thread only
+//! (`MPI_THREAD_FUNNELED`); rayon workers never touch it.
+
+use crate::comm::{Comm, Incoming, Outgoing};
+use mpi::collective::CommunicatorCollectives;
+use mpi::datatype::PartitionMut;
+use mpi::point_to_point::{Destination, Source};
+use mpi::topology::{Communicator, SimpleCommunicator};
+use mpi::traits::AsRaw;
+use mpi::Count;
+use std::time::Instant;
+
+/// The raw MPI communicator handle (`MPI_Comm`), for parallel HDF5.
+pub type RawComm = mpi::ffi::MPI_Comm;
+
+/// Whether this process was started by an MPI launcher (mpirun, srun, …). A plain
+/// `grainflow run` is then a one-rank job that never initialises MPI.
+pub fn launched_by_mpi() -> bool {
+    [
+        "OMPI_COMM_WORLD_SIZE",
+        "PMI_SIZE",
+        "PMIX_RANK",
+        "MPI_LOCALNRANKS",
+        "SLURM_STEP_NUM_TASKS",
+    ]
+    .iter()
+    .any(|v| std::env::var_os(v).is_some())
+}
+
+/// `MPI_COMM_WORLD` of an initialised MPI universe. Dropping it finalises MPI.
+pub struct MpiComm {
+    world: SimpleCommunicator,
+    rank: usize,
+    size: usize,
+    // Declared last: finalises MPI after `world` is dropped.
+    _universe: mpi::environment::Universe,
+}
+
+// SAFETY: the communicator is only used from the thread that initialised MPI (funneled
+// mode); grainflow calls `Comm` methods from its main loop only. The handle itself is an
+// immutable pointer that Open MPI allows to be shared.
+unsafe impl Send for MpiComm {}
+unsafe impl Sync for MpiComm {}
+
+impl MpiComm {
+    /// Initialise MPI (funneled threading). `None` if MPI was already initialised.
+    pub fn init() -> Option<Self> {
+        let (universe, _) = mpi::initialize_with_threading(mpi::Threading::Funneled)?;
+        let world = universe.world();
+        Some(Self {
+            rank: world.rank() as usize,
+            size: world.size() as usize,
+            world,
+            _universe: universe,
+        })
+    }
+
+    fn counts(&self, n: usize) -> (Vec<Count>, Vec<Count>, usize) {
+        let mut counts = vec![0 as Count; self.size];
+        self.world.all_gather_into(&(n as Count), &mut counts[..]);
+        let displs: Vec<Count> = counts
+            .iter()
+            .scan(0, |acc, &c| {
+                let d = *acc;
+                *acc += c;
+                Some(d)
+            })
+            .collect();
+        let total = counts.iter().map(|&c| c as usize).sum();
+        (counts, displs, total)
+    }
+}
+
+impl Comm for MpiComm {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+    fn size(&self) -> usize {
+        self.size
+    }
+    fn all_gather_f64(&self, local: &[f64]) -> Vec<f64> {
+        let (counts, displs, total) = self.counts(local.len());
+        let mut out = vec![0.0; total];
+        let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
+        self.world.all_gather_varcount_into(local, &mut part);
+        out
+    }
+    fn all_gather_bytes(&self, local: &[u8]) -> Vec<u8> {
+        let (counts, displs, total) = self.counts(local.len());
+        let mut out = vec![0u8; total];
+        let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
+        self.world.all_gather_varcount_into(local, &mut part);
+        out
+    }
+    fn barrier(&self) {
+        self.world.barrier();
+    }
+    fn exchange(
+        &self,
+        sends: &[Outgoing<'_>],
+        recvs: &mut [Incoming<'_>],
+        overlap: &mut dyn FnMut(),
+    ) -> f64 {
+        mpi::request::scope(|scope| {
+            // Receives first, so that eager messages land directly in their buffers.
+            let rreq: Vec<_> = recvs
+                .iter_mut()
+                .map(|r| {
+                    self.world
+                        .process_at_rank(r.peer as i32)
+                        .immediate_receive_into_with_tag(scope, &mut *r.data, r.tag as i32)
+                })
+                .collect();
+            let sreq: Vec<_> = sends
+                .iter()
+                .map(|s| {
+                    self.world
+                        .process_at_rank(s.peer as i32)
+                        .immediate_send_with_tag(scope, s.data, s.tag as i32)
+                })
+                .collect();
+            overlap();
+            let t = Instant::now();
+            for r in rreq {
+                r.wait();
+            }
+            for s in sreq {
+                s.wait();
+            }
+            t.elapsed().as_secs_f64()
+        })
+    }
+    fn raw_mpi(&self) -> Option<RawComm> {
+        Some(self.world.as_raw())
+    }
+}

@@ -1,0 +1,192 @@
+//! Parallel HDF5 plumbing: open a file through MPI-IO when the run has several ranks, and
+//! read or write one rank's hyperslab of a global dataset — collectively on MPI-IO files
+//! (every rank calls, each with its own block), so no rank funnels another's data.
+
+use decomposition::Comm;
+use hdf5::types::H5Type;
+use hdf5_sys::h5d::{H5Dread, H5Dwrite};
+use hdf5_sys::h5i::hid_t;
+use hdf5_sys::h5p::H5FD_mpio_xfer_t;
+use hdf5_sys::h5p::{H5Pclose, H5Pcreate, H5Pset_dxpl_mpio};
+use hdf5_sys::h5s::{H5S_seloper_t, H5Sclose, H5Screate_simple, H5Sselect_hyperslab};
+use std::path::Path;
+
+/// How a file is accessed: serially (one rank) or through MPI-IO (collective transfers).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Access {
+    /// One process, the default sec2 driver.
+    Serial,
+    /// Every rank of the communicator opens the file; transfers are collective.
+    Mpio,
+}
+
+fn access_of(comm: &dyn Comm) -> Option<(Access, Option<decomposition::RawComm>)> {
+    match (comm.size(), comm.raw_mpi()) {
+        (1, _) => Some((Access::Serial, None)),
+        (_, Some(raw)) => Some((Access::Mpio, Some(raw))),
+        (_, None) => None,
+    }
+}
+
+/// Create (truncate) `path` for every rank of `comm`. Collective.
+pub fn create(path: &Path, comm: &dyn Comm) -> hdf5::Result<(hdf5::File, Access)> {
+    match access_of(comm).ok_or("several ranks without an MPI communicator")? {
+        (Access::Serial, _) => Ok((hdf5::File::create(path)?, Access::Serial)),
+        (Access::Mpio, raw) => {
+            let raw = raw.expect("MPI-IO access has a communicator");
+            let f = hdf5::File::with_options()
+                .with_fapl(|p| p.mpio(raw, None))
+                .create(path)?;
+            Ok((f, Access::Mpio))
+        }
+    }
+}
+
+/// Open `path` read-only (`write = false`) or read-write on every rank of `comm`. Collective.
+pub fn open(path: &Path, comm: &dyn Comm, write: bool) -> hdf5::Result<(hdf5::File, Access)> {
+    let mode = if write {
+        hdf5::file::OpenMode::ReadWrite
+    } else {
+        hdf5::file::OpenMode::Read
+    };
+    match access_of(comm).ok_or("several ranks without an MPI communicator")? {
+        (Access::Serial, _) => Ok((hdf5::File::open_as(path, mode)?, Access::Serial)),
+        (Access::Mpio, raw) => {
+            let raw = raw.expect("MPI-IO access has a communicator");
+            let f = hdf5::File::with_options()
+                .with_fapl(|p| p.mpio(raw, None))
+                .open_as(path, mode)?;
+            Ok((f, Access::Mpio))
+        }
+    }
+}
+
+/// A hyperslab: `start` and `count` per dimension of the dataset.
+#[derive(Debug, Clone)]
+pub struct Block {
+    /// First index per dimension.
+    pub start: Vec<u64>,
+    /// Extent per dimension.
+    pub count: Vec<u64>,
+}
+
+impl Block {
+    /// Values in the block.
+    pub fn len(&self) -> usize {
+        self.count.iter().product::<u64>() as usize
+    }
+    /// True for an empty block.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Spaces and transfer list of one hyperslab transfer, closed on drop.
+struct Transfer {
+    mem: hid_t,
+    file: hid_t,
+    xfer: hid_t,
+}
+
+impl Transfer {
+    fn new(ds: &hdf5::Dataset, block: &Block, access: Access) -> hdf5::Result<Self> {
+        // SAFETY: plain HDF5 C calls on valid ids; every id made here is closed in Drop.
+        unsafe {
+            let mem = H5Screate_simple(
+                block.count.len() as i32,
+                block.count.as_ptr(),
+                std::ptr::null(),
+            );
+            let file = hdf5_sys::h5d::H5Dget_space(ds.id());
+            let xfer = H5Pcreate(*hdf5::globals::H5P_DATASET_XFER);
+            let t = Self { mem, file, xfer };
+            if mem < 0 || file < 0 || xfer < 0 {
+                return Err("cannot create HDF5 dataspaces for a hyperslab".into());
+            }
+            if H5Sselect_hyperslab(
+                file,
+                H5S_seloper_t::H5S_SELECT_SET,
+                block.start.as_ptr(),
+                std::ptr::null(),
+                block.count.as_ptr(),
+                std::ptr::null(),
+            ) < 0
+            {
+                return Err("hyperslab outside the dataset".into());
+            }
+            if access == Access::Mpio
+                && H5Pset_dxpl_mpio(xfer, H5FD_mpio_xfer_t::H5FD_MPIO_COLLECTIVE) < 0
+            {
+                return Err("cannot request collective MPI-IO transfers".into());
+            }
+            Ok(t)
+        }
+    }
+}
+
+impl Drop for Transfer {
+    fn drop(&mut self) {
+        // SAFETY: ids created in `new`.
+        unsafe {
+            H5Sclose(self.mem);
+            H5Sclose(self.file);
+            H5Pclose(self.xfer);
+        }
+    }
+}
+
+/// Write `data` (row-major, `block.len()` values) into `block` of `ds`. Collective on
+/// MPI-IO files: every rank must call it for the same dataset.
+pub fn write_block<T: H5Type>(
+    ds: &hdf5::Dataset,
+    block: &Block,
+    data: &[T],
+    access: Access,
+) -> hdf5::Result<()> {
+    assert_eq!(data.len(), block.len(), "hyperslab size");
+    let t = Transfer::new(ds, block, access)?;
+    let mem_type = hdf5::Datatype::from_type::<T>()?;
+    // SAFETY: `data` holds exactly the selected number of values of the memory type.
+    let status = unsafe {
+        H5Dwrite(
+            ds.id(),
+            mem_type.id(),
+            t.mem,
+            t.file,
+            t.xfer,
+            data.as_ptr().cast(),
+        )
+    };
+    if status < 0 {
+        return Err(format!("H5Dwrite of a hyperslab of {} failed", ds.name()).into());
+    }
+    Ok(())
+}
+
+/// Read `block` of `ds` into `out` (row-major, `block.len()` values). Collective on
+/// MPI-IO files.
+pub fn read_block<T: H5Type>(
+    ds: &hdf5::Dataset,
+    block: &Block,
+    out: &mut [T],
+    access: Access,
+) -> hdf5::Result<()> {
+    assert_eq!(out.len(), block.len(), "hyperslab size");
+    let t = Transfer::new(ds, block, access)?;
+    let mem_type = hdf5::Datatype::from_type::<T>()?;
+    // SAFETY: `out` has room for exactly the selected number of values.
+    let status = unsafe {
+        H5Dread(
+            ds.id(),
+            mem_type.id(),
+            t.mem,
+            t.file,
+            t.xfer,
+            out.as_mut_ptr().cast(),
+        )
+    };
+    if status < 0 {
+        return Err(format!("H5Dread of a hyperslab of {} failed", ds.name()).into());
+    }
+    Ok(())
+}
