@@ -77,76 +77,10 @@ pub fn write<T: H5Type + Copy>(
     };
     {
         let (file, access) = h5par::create(&tmp, comm).map_err(h5)?;
-        let [nx, ny] = lattice.global;
-        let root_attrs: [(&str, f64); 4] = [
-            ("step", run.step as f64),
-            ("time_s", run.time_s),
-            ("nx", nx as f64),
-            ("ny", ny as f64),
-        ];
-        for (name, v) in root_attrs {
-            // Integers are stored as u64, the time as f64.
-            if name == "time_s" {
-                file.new_attr::<f64>()
-                    .create(name)
-                    .and_then(|a| a.write_scalar(&v))
-                    .map_err(h5)?;
-            } else {
-                file.new_attr::<u64>()
-                    .create(name)
-                    .and_then(|a| a.write_scalar(&(v as u64)))
-                    .map_err(h5)?;
-            }
-        }
-        file.new_attr::<u32>()
-            .create("format_version")
-            .and_then(|a| a.write_scalar(&FORMAT_VERSION))
-            .map_err(h5)?;
-        for (name, v) in [
-            ("format", FORMAT),
-            ("grainflow_version", env!("CARGO_PKG_VERSION")),
-            ("precision", run.precision.as_str()),
-        ] {
-            file.new_attr::<VarLenUnicode>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&vlu(v)))
-                .map_err(h5)?;
-        }
-        let lbm = file.create_group("lbm").map_err(h5)?;
-        let (x0, width) = lattice.slab;
-        let ds = lbm
-            .new_dataset::<T>()
-            .shape([9, ny, nx])
-            .create("populations")
-            .map_err(h5)?;
-        let block = Block {
-            start: vec![0, 0, x0 as u64],
-            count: vec![9, ny as u64, width as u64],
-        };
-        h5par::write_block(&ds, &block, lattice.populations, access).map_err(h5)?;
-        let rg = file.create_group("run").map_err(h5)?;
-        write_small(&rg, "totals_initial", &run.totals_initial, 1, access).map_err(h5)?;
-        let pg = rg.create_group("probes").map_err(h5)?;
-        for (k, s) in run.series.iter().enumerate() {
-            let cols = 2 + s.columns.len();
-            let mut rows = Vec::with_capacity(s.len() * cols);
-            for j in 0..s.len() {
-                rows.push(s.steps[j] as f64);
-                rows.push(s.times[j]);
-                rows.extend_from_slice(&s.values[j * s.columns.len()..(j + 1) * s.columns.len()]);
-            }
-            let name = format!("{k:03}");
-            write_small(&pg, &name, &rows, cols, access).map_err(h5)?;
-            pg.dataset(&name)
-                .and_then(|d| {
-                    d.new_attr::<VarLenUnicode>()
-                        .create("name")
-                        .and_then(|a| a.write_scalar(&vlu(&s.name)))
-                })
-                .map_err(h5)?;
-        }
+        fill(&file, access, lattice, run).map_err(h5)?;
         file.flush().map_err(h5)?;
-        file.close().map_err(h5)?;
+        // Every group and dataset is closed by now: MPI-IO files refuse to close otherwise.
+        drop(file);
     }
     comm.barrier();
     let mut status = Ok(());
@@ -162,6 +96,78 @@ pub fn write<T: H5Type + Copy>(
     }
     comm.barrier();
     status
+}
+
+/// Everything but the file itself: root attributes, `/lbm`, `/run`.
+fn fill<T: H5Type + Copy>(
+    file: &hdf5::File,
+    access: Access,
+    lattice: &LatticeState<'_, T>,
+    run: &RunState,
+) -> hdf5::Result<()> {
+    let [nx, ny] = lattice.global;
+    let root_attrs: [(&str, f64); 4] = [
+        ("step", run.step as f64),
+        ("time_s", run.time_s),
+        ("nx", nx as f64),
+        ("ny", ny as f64),
+    ];
+    for (name, v) in root_attrs {
+        // Integers are stored as u64, the time as f64.
+        if name == "time_s" {
+            file.new_attr::<f64>()
+                .create(name)
+                .and_then(|a| a.write_scalar(&v))?;
+        } else {
+            file.new_attr::<u64>()
+                .create(name)
+                .and_then(|a| a.write_scalar(&(v as u64)))?;
+        }
+    }
+    file.new_attr::<u32>()
+        .create("format_version")
+        .and_then(|a| a.write_scalar(&FORMAT_VERSION))?;
+    for (name, v) in [
+        ("format", FORMAT),
+        ("grainflow_version", env!("CARGO_PKG_VERSION")),
+        ("precision", run.precision.as_str()),
+    ] {
+        file.new_attr::<VarLenUnicode>()
+            .create(name)
+            .and_then(|a| a.write_scalar(&vlu(v)))?;
+    }
+    let lbm = file.create_group("lbm")?;
+    let (x0, width) = lattice.slab;
+    let ds = lbm
+        .new_dataset::<T>()
+        .shape([9, ny, nx])
+        .create("populations")?;
+    let block = Block {
+        start: vec![0, 0, x0 as u64],
+        count: vec![9, ny as u64, width as u64],
+    };
+    h5par::write_block(&ds, &block, lattice.populations, access)?;
+    let rg = file.create_group("run")?;
+    write_small(&rg, "totals_initial", &run.totals_initial, 1, access)?;
+    let pg = rg.create_group("probes")?;
+    for (k, s) in run.series.iter().enumerate() {
+        let cols = 2 + s.columns.len();
+        let mut rows = Vec::with_capacity(s.len() * cols);
+        for j in 0..s.len() {
+            rows.push(s.steps[j] as f64);
+            rows.push(s.times[j]);
+            rows.extend_from_slice(&s.values[j * s.columns.len()..(j + 1) * s.columns.len()]);
+        }
+        let name = format!("{k:03}");
+        write_small(&pg, &name, &rows, cols, access)?;
+        pg.dataset(&name).and_then(|d| {
+            d.new_attr::<VarLenUnicode>()
+                .create("name")
+                .and_then(|a| a.write_scalar(&vlu(&s.name)))
+        })?;
+    }
+
+    Ok(())
 }
 
 /// A small 2-D dataset `[len / cols, cols]` of f64, identical on every rank.
