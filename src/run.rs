@@ -132,6 +132,11 @@ pub struct Summary {
     pub stages: BTreeMap<&'static str, StageStats>,
     /// Checkpoints written during the run.
     pub checkpoints: Vec<PathBuf>,
+    /// HDF5 snapshot data written (bytes, all ranks) and the slowest rank's seconds in
+    /// the HDF5 write calls: their ratio is the parallel write bandwidth.
+    pub snapshot_bytes: u64,
+    /// See `snapshot_bytes`.
+    pub snapshot_write_s: f64,
     /// Totals at the start and the end (lattice units).
     pub totals_initial: Totals,
     /// See `totals_initial`.
@@ -431,6 +436,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
         stage_seconds: stages.iter().map(|(k, v)| (*k, v.max_s)).collect(),
         stages,
         checkpoints,
+        snapshot_bytes: out.bytes,
+        snapshot_write_s: comm.max_f64(out.write_s),
         totals_initial,
         totals_final,
         probes,
@@ -455,6 +462,9 @@ struct Output {
     fields: Vec<FieldName>,
     pictures: bool,
     root: bool,
+    /// Bytes of field data in the file (global), and seconds this rank spent writing them.
+    bytes: u64,
+    write_s: f64,
 }
 
 impl Output {
@@ -476,6 +486,8 @@ impl Output {
             fields: scene.scene.run.fields.clone(),
             pictures: scene.scene.run.pictures,
             root: comm.is_root(),
+            bytes: 0,
+            write_s: 0.0,
         })
     }
 
@@ -515,7 +527,14 @@ impl Output {
                 values,
             });
         }
+        let t = Instant::now();
         self.h5.write(step, u.time_si(step), &data)?;
+        self.write_s += t.elapsed().as_secs_f64();
+        let cells = (sim.partition.columns() * f.ny) as u64;
+        self.bytes += data
+            .iter()
+            .map(|d| cells * d.components as u64 * 8)
+            .sum::<u64>();
         if self.pictures {
             // Pictures are one image of the whole lattice: gathered on every rank, drawn by rank 0.
             let speed_local: Vec<f64> = velocity.chunks(2).map(|v| v[0].hypot(v[1])).collect();

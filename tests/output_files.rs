@@ -66,9 +66,24 @@ fn snapshots_probes_and_summary() {
         "totals_final",
         "scene",
         "probes",
+        "stages",
+        "ranks",
+        "partition",
+        "halo_bytes_per_step",
     ] {
         assert!(!j[key].is_null(), "summary.json lacks {key}");
     }
     assert!(j["units"]["tau"].as_f64().unwrap() > 0.5);
-    assert_eq!(j["stage_seconds"].as_object().unwrap().len(), 4);
+    let stages = j["stages"].as_object().unwrap();
+    assert_eq!(stages.len(), grainflow::simulation::STAGES.len());
+    for (name, st) in stages {
+        let (min, mean, max) = (
+            st["min_s"].as_f64().unwrap(),
+            st["mean_s"].as_f64().unwrap(),
+            st["max_s"].as_f64().unwrap(),
+        );
+        assert!(min <= mean && mean <= max, "{name}: {st}");
+    }
+    assert_eq!(j["ranks"], 1);
+    assert_eq!(j["halo_bytes_per_step"], 0, "one rank exchanges nothing");
 }
