@@ -108,6 +108,14 @@ fn rank_invariance(scene: &str) {
         assert_eq!(j["partition"].as_array().unwrap().len(), n);
         assert!(j["halo_bytes_per_step"].as_u64().unwrap() > 0);
         assert_bit_identical(&one, &many);
+        // The file written through MPI-IO opens with the stock HDF5 tools too.
+        let dump = Command::new("h5dump")
+            .args(["-H"])
+            .arg(many.join("fields.h5"))
+            .output()
+            .expect("h5dump (hdf5-tools, installed by scripts/setup.sh)");
+        assert!(dump.status.success());
+        assert!(String::from_utf8_lossy(&dump.stdout).contains("DATASET \"velocity\""));
     }
 }
 
