@@ -2,7 +2,7 @@
 //! (`MPI_THREAD_FUNNELED`); rayon workers never touch it.
 
 use crate::comm::{Comm, Incoming, Outgoing};
-use mpi::collective::CommunicatorCollectives;
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
 use mpi::datatype::PartitionMut;
 use mpi::point_to_point::{Destination, Source};
 use mpi::topology::{Communicator, SimpleCommunicator};
@@ -94,6 +94,24 @@ impl Comm for MpiComm {
     }
     fn barrier(&self) {
         self.world.barrier();
+    }
+    /// One `MPI_Allreduce(MAX)`: called every step (instability and signal agreement), so
+    /// it avoids the two collectives of the gather-based default. Max is order-independent.
+    fn max_f64(&self, value: f64) -> f64 {
+        // MPI's MAX is undefined for NaN: carry "some rank has NaN" as a second value.
+        let send = if value.is_nan() {
+            [f64::NEG_INFINITY, 1.0]
+        } else {
+            [value, 0.0]
+        };
+        let mut out = [0.0; 2];
+        self.world
+            .all_reduce_into(&send[..], &mut out[..], SystemOperation::max());
+        if out[1] > 0.0 {
+            f64::NAN
+        } else {
+            out[0]
+        }
     }
     fn exchange(
         &self,

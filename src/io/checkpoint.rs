@@ -106,24 +106,14 @@ fn fill<T: H5Type + Copy>(
     run: &RunState,
 ) -> hdf5::Result<()> {
     let [nx, ny] = lattice.global;
-    let root_attrs: [(&str, f64); 4] = [
-        ("step", run.step as f64),
-        ("time_s", run.time_s),
-        ("nx", nx as f64),
-        ("ny", ny as f64),
-    ];
-    for (name, v) in root_attrs {
-        // Integers are stored as u64, the time as f64.
-        if name == "time_s" {
-            file.new_attr::<f64>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&v))?;
-        } else {
-            file.new_attr::<u64>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&(v as u64)))?;
-        }
+    for (name, v) in [("step", run.step), ("nx", nx as u64), ("ny", ny as u64)] {
+        file.new_attr::<u64>()
+            .create(name)
+            .and_then(|a| a.write_scalar(&v))?;
     }
+    file.new_attr::<f64>()
+        .create("time_s")
+        .and_then(|a| a.write_scalar(&run.time_s))?;
     file.new_attr::<u32>()
         .create("format_version")
         .and_then(|a| a.write_scalar(&FORMAT_VERSION))?;
