@@ -21,6 +21,15 @@ pub enum PrecisionArg {
     F64,
 }
 
+/// Device of the fluid solver on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum BackendArg {
+    /// rayon threads.
+    Cpu,
+    /// wgpu compute kernels (Vulkan).
+    Gpu,
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -46,12 +55,15 @@ pub enum Command {
         /// Continue from a checkpoint (e.g. runs/NAME/checkpoint.h5), on any rank count.
         #[arg(long, value_name = "CHECKPOINT")]
         restart: Option<PathBuf>,
+        /// Device of the fluid solver, overriding the scene's `[run] backend`.
+        #[arg(long, value_enum)]
+        backend: Option<BackendArg>,
     },
     /// Validate a scene and print the derived lattice parameters and memory estimate.
     Check {
         /// Scene file (TOML).
         scene: PathBuf,
     },
-    /// Print version, threads and build information.
+    /// Print version, threads, ranks and the GPU adapters wgpu finds.
     Info,
 }

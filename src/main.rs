@@ -4,9 +4,9 @@ mod cli;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use cli::{Cli, Command, PrecisionArg};
+use cli::{BackendArg, Cli, Command, PrecisionArg};
 use decomposition::{launched_by_mpi, Comm, MpiComm, SingleProcess};
-use grainflow::run::{run_on, step_count, Precision, RunOptions, Status};
+use grainflow::run::{run_on, step_count, Backend, Precision, RunOptions, Status};
 use grainflow::scene;
 
 fn main() {
@@ -47,7 +47,27 @@ fn real_main() -> Result<i32> {
                 "ranks: {} (MPI slab decomposition along x; start with mpirun -np N)",
                 comm.size()
             );
-            println!("GPU backends: none built in yet");
+            let adapters = grainflow::gpu::list_adapters();
+            if adapters.is_empty() {
+                println!(
+                    "GPU adapters: none found (install a Vulkan driver; `--backend gpu` needs one)"
+                );
+            } else {
+                println!("GPU adapters (wgpu; `--backend gpu` picks the first discrete GPU, or GRAINFLOW_GPU_ADAPTER=i):");
+            }
+            for (i, a) in adapters.iter().enumerate() {
+                println!(
+                    "  [{i}] {} — {}, {}, driver {}; f64: {}; largest storage binding {} MiB, buffer {} MiB, {} storage buffers per stage",
+                    a.name,
+                    a.backend,
+                    a.device_type,
+                    a.driver.trim(),
+                    if a.f64 { "yes" } else { "no (f32 only)" },
+                    a.max_storage_binding >> 20,
+                    a.max_buffer >> 20,
+                    a.max_storage_buffers
+                );
+            }
             Ok(0)
         }
         Command::Check { scene } => {
@@ -63,6 +83,7 @@ fn real_main() -> Result<i32> {
             steps,
             quiet,
             restart,
+            backend,
         } => {
             let comm = communicator()?;
             let comm = comm.as_ref();
@@ -102,6 +123,10 @@ fn real_main() -> Result<i32> {
                 steps,
                 progress: !quiet,
                 restart,
+                backend: backend.map(|b| match b {
+                    BackendArg::Cpu => Backend::Cpu,
+                    BackendArg::Gpu => Backend::Gpu,
+                }),
             };
             let root = comm.is_root();
             if root {

@@ -21,7 +21,7 @@ use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 use thiserror::Error;
 
-pub use crate::scene::Precision;
+pub use crate::scene::{Backend, Precision};
 
 /// Options from the command line that override or complement the scene.
 #[derive(Debug, Clone)]
@@ -30,6 +30,8 @@ pub struct RunOptions {
     pub out_dir: PathBuf,
     /// Precision override.
     pub precision: Option<Precision>,
+    /// Backend override (the scene's `[run] backend` otherwise).
+    pub backend: Option<Backend>,
     /// Step count override.
     pub steps: Option<u64>,
     /// Show progress (bar on a terminal, log lines otherwise).
@@ -50,6 +52,9 @@ pub enum RunError {
     /// An analysis failed.
     #[error(transparent)]
     Analysis(#[from] analysis::AnalysisError),
+    /// The GPU backend could not start.
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
 }
 
 /// How a run ended.
@@ -98,6 +103,10 @@ pub struct Summary {
     pub warnings: Vec<String>,
     /// Precision used.
     pub precision: Precision,
+    /// Backend used.
+    pub backend: Backend,
+    /// The device that ran the fluid solver (rank 0's).
+    pub device: String,
     /// MPI ranks.
     pub ranks: usize,
     /// Rayon threads per rank.
@@ -218,8 +227,9 @@ fn run_typed<T: Real + hdf5::H5Type>(
 ) -> Result<Summary, RunError> {
     let run = &scene.scene.run;
     let n = step_count(scene, opts.steps);
-    let mut sim = Simulation::<T>::new(scene, comm)?;
-    let (nx, ny) = (sim.partition.columns(), sim.lattice.ny());
+    let backend = opts.backend.unwrap_or(run.backend);
+    let mut sim = Simulation::<T>::new(scene, comm, backend)?;
+    let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
     let checkpoint_path = opts.out_dir.join("checkpoint.h5");
     let mut totals_initial = None;
     if let Some(path) = &opts.restart {
@@ -228,18 +238,18 @@ fn run_typed<T: Real + hdf5::H5Type>(
             comm,
             T::NAME,
             [nx, ny],
-            (sim.lattice.x_offset(), sim.lattice.nx()),
+            (sim.fluid.lattice().x_offset(), sim.fluid.lattice().nx()),
             &sim.series,
         )?;
         sim.restore(&r.populations, r.run.step, r.run.series);
         totals_initial = Some(Totals::from_array(r.run.totals_initial));
     }
-    let start_step = sim.lattice.steps_done();
+    let start_step = sim.fluid.lattice().steps_done();
     let layout = Layout {
         nx,
         ny,
-        x0: sim.lattice.x_offset(),
-        width: sim.lattice.nx(),
+        x0: sim.fluid.lattice().x_offset(),
+        width: sim.fluid.lattice().nx(),
         dx: scene.units.dx_m,
     };
     let resume = opts.restart.as_ref().map(|_| start_step);
@@ -271,8 +281,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let mut interrupted = false;
     let write_checkpoint = |sim: &mut Simulation<T>, checkpoints: &mut Vec<PathBuf>| {
         let t = Instant::now();
-        let pops = sim.lattice.export_interior();
-        let steps = sim.lattice.steps_done();
+        let pops = sim.fluid.export_interior();
+        let steps = sim.fluid.lattice().steps_done();
         let state = checkpoint::RunState {
             step: steps,
             time_s: scene.units.time_si(steps),
@@ -282,7 +292,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         };
         let lat = checkpoint::LatticeState {
             global: [nx, ny],
-            slab: (sim.lattice.x_offset(), sim.lattice.nx()),
+            slab: (sim.fluid.lattice().x_offset(), sim.fluid.lattice().nx()),
             populations: &pops,
         };
         let r = checkpoint::write(&checkpoint_path, comm, &lat, &state);
@@ -295,10 +305,20 @@ fn run_typed<T: Real + hdf5::H5Type>(
             error = Some(e.to_string());
             break;
         }
-        if step % run.probe_every == 0 {
+        let probe = step % run.probe_every == 0;
+        let output = (run.output_every > 0 && step % run.output_every == 0) || step == n;
+        if probe || output {
+            // A device backend checks for instabilities every few steps; nothing is
+            // recorded from a bad state.
+            if let Err(e) = sim.check(comm) {
+                error = Some(e.to_string());
+                break;
+            }
+        }
+        if probe {
             sim.record_probes(comm);
         }
-        if (run.output_every > 0 && step % run.output_every == 0) || step == n {
+        if output {
             let t = Instant::now();
             let f = sim.fields(comm);
             out.snapshot(step, &scene.units, &mut sim, comm, &f)?;
@@ -320,6 +340,10 @@ fn run_typed<T: Real + hdf5::H5Type>(
             || agreed != 0
             || (step == n && run.checkpoint_at_end);
         if due {
+            if let Err(e) = sim.check(comm) {
+                error = Some(e.to_string());
+                break;
+            }
             write_checkpoint(&mut sim, &mut checkpoints)?;
             last_checkpoint = Instant::now();
         }
@@ -331,7 +355,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
     }
     let wall = start.elapsed().as_secs_f64();
     progress.finish();
-    let steps = sim.lattice.steps_done();
+    let steps = sim.fluid.lattice().steps_done();
     let fields = if latest.0 == steps {
         latest.1
     } else {
@@ -403,7 +427,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         })
         .collect();
     let wall = comm.max_f64(wall);
-    let mut halo_bytes = [sim.lattice.halo_bytes_per_step() as f64];
+    let mut halo_bytes = [sim.fluid.lattice().halo_bytes_per_step() as f64];
     comm.sum_f64(&mut halo_bytes);
     let summary = Summary {
         version: env!("CARGO_PKG_VERSION"),
@@ -414,6 +438,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
         error,
         warnings: scene.warnings.clone(),
         precision,
+        backend,
+        device: sim.fluid.device(),
         ranks: comm.size(),
         threads: rayon::current_num_threads(),
         partition: (0..comm.size())
@@ -427,7 +453,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         units: scene.units,
         cells: [nx, ny],
         fluid_cells: sim.fluid_cells(comm),
-        memory_bytes: sim.lattice.storage_bytes(),
+        memory_bytes: sim.fluid.lattice().storage_bytes(),
         steps,
         simulated_time_s: scene.units.time_si(steps),
         wall_time_s: wall,

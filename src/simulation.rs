@@ -2,12 +2,17 @@
 //! list of named, timed stages. A fluid-only scene holds only a lattice (this rank's slab).
 
 use crate::analysis::flows::{taylor_green_pressure, taylor_green_velocity};
+use crate::gpu::{GpuContext, GpuFluid};
 use crate::io::probes::Series;
 use crate::lbm::fields::{Fields, Totals};
 use crate::lbm::lattice::StepError;
-use crate::lbm::{Lattice, Real};
-use crate::scene::{build_lattice, solid_id_of, Initial, Probe, SceneError, Units, ValidScene};
+use crate::lbm::{FluidBackend, Lattice, Real};
+use crate::run::RunError;
+use crate::scene::{
+    build_lattice, solid_id_of, Backend, Initial, Probe, SceneError, Units, ValidScene,
+};
 use decomposition::{Comm, Side, SlabHalo, SlabPartition};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Names of the stages of one step, in execution order.
@@ -61,8 +66,8 @@ enum ProbeTarget {
 
 /// The fluid state of this rank's slab plus the run's probes.
 pub struct Simulation<T: Real> {
-    /// This rank's slab of the lattice.
-    pub lattice: Lattice<T>,
+    /// This rank's slab of the lattice, on the device the run chose.
+    pub fluid: Box<dyn FluidBackend<T>>,
     /// Derived units.
     pub units: Units,
     /// How the columns are split over ranks.
@@ -80,8 +85,9 @@ pub struct Simulation<T: Real> {
 
 impl<T: Real> Simulation<T> {
     /// Allocate this rank's slab, rasterise obstacles, apply the initial condition, place
-    /// probes. Columns are split over the ranks of `comm` by fluid-cell count.
-    pub fn new(scene: &ValidScene, comm: &dyn Comm) -> Result<Self, SceneError> {
+    /// probes, and move the slab to `backend`'s device. Columns are split over the ranks
+    /// of `comm` by fluid-cell count.
+    pub fn new(scene: &ValidScene, comm: &dyn Comm, backend: Backend) -> Result<Self, RunError> {
         let built = build_lattice(scene)?;
         let units = scene.units;
         let invalid = |key: &str, message: String| SceneError::Invalid {
@@ -103,7 +109,8 @@ impl<T: Real> Simulation<T> {
                             format!(
                                 "probe `{name}` lies inside an obstacle; move it into the fluid"
                             ),
-                        ));
+                        )
+                        .into());
                     }
                     targets.push(ProbeTarget::Cell(x, y));
                     series.push(Series::new(name, vec!["ux_m_s", "uy_m_s", "pressure_pa"]));
@@ -159,6 +166,10 @@ impl<T: Real> Simulation<T> {
             }
         }
         lattice.update_boundaries();
+        let fluid: Box<dyn FluidBackend<T>> = match backend {
+            Backend::Cpu => Box::new(lattice),
+            Backend::Gpu => Box::new(GpuFluid::new(lattice, Arc::new(GpuContext::open()?))?),
+        };
         let b = &scene.scene.boundaries;
         let ramp_s = [&b.west, &b.east, &b.south, &b.north]
             .iter()
@@ -170,7 +181,7 @@ impl<T: Real> Simulation<T> {
         let mut field_halo = SlabHalo::new(&partition, comm.rank(), false);
         field_halo.set_message_bytes(ny * 9);
         let mut sim = Self {
-            lattice,
+            fluid,
             units,
             partition,
             series,
@@ -185,7 +196,7 @@ impl<T: Real> Simulation<T> {
 
     /// Continue from a checkpoint: populations, step and probe series. Collective.
     pub fn restore(&mut self, populations: &[T], step: u64, series: Vec<Series>) {
-        self.lattice.import_interior(populations, step);
+        self.fluid.import_interior(populations, step);
         self.series = series;
         self.apply_ramp();
     }
@@ -193,13 +204,13 @@ impl<T: Real> Simulation<T> {
     /// Inlet factor sin²(π t / 2T) for t < T, for the step about to be taken.
     fn apply_ramp(&mut self) {
         if self.ramp_s > 0.0 {
-            let t = self.units.time_si(self.lattice.steps_done() + 1);
+            let t = self.units.time_si(self.fluid.lattice().steps_done() + 1);
             let r = if t >= self.ramp_s {
                 1.0
             } else {
                 (0.5 * std::f64::consts::PI * t / self.ramp_s).sin().powi(2)
             };
-            self.lattice.set_inlet_scale(r);
+            self.fluid.set_inlet_scale(r);
         }
     }
 
@@ -207,11 +218,11 @@ impl<T: Real> Simulation<T> {
     /// the halo exchange overlapped with the inner cells), then the local halo boundaries.
     /// Probes and output are driven by the caller. Collective.
     pub fn step(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
-        let lat = &mut self.lattice;
-        let wait0 = lat.halo_wait_seconds();
+        let lat = &mut self.fluid;
+        let wait0 = lat.lattice().halo_wait_seconds();
         let t = Instant::now();
         let r = lat.stream_collide(comm);
-        let waited = lat.halo_wait_seconds() - wait0;
+        let waited = lat.lattice().halo_wait_seconds() - wait0;
         self.times.seconds[stage::COLLIDE_STREAM] += t.elapsed().as_secs_f64() - waited;
         self.times.seconds[stage::HALO_WAIT] += waited;
         r?;
@@ -219,6 +230,12 @@ impl<T: Real> Simulation<T> {
             .time(stage::BOUNDARIES, || lat.update_boundaries());
         self.apply_ramp();
         Ok(())
+    }
+
+    /// Make sure the state is good before it is recorded (a device backend checks for
+    /// instabilities only every few steps). Collective.
+    pub fn check(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
+        self.fluid.check(comm)
     }
 
     /// Stage "probes": record every probe at the current step. Point probes are sampled
@@ -229,30 +246,33 @@ impl<T: Real> Simulation<T> {
             return;
         }
         let t0 = Instant::now();
-        let step = self.lattice.steps_done();
+        let step = self.fluid.lattice().steps_done();
         let t = self.units.time_si(step);
         let forces = if self
             .targets
             .iter()
             .any(|p| matches!(p, ProbeTarget::Solid(_)))
         {
-            self.lattice.forces(comm)
+            self.fluid.forces(comm)
         } else {
             Vec::new()
         };
-        let (x0, nx) = (self.lattice.x_offset(), self.lattice.nx());
+        let (x0, nx) = (self.fluid.lattice().x_offset(), self.fluid.lattice().nx());
+        let cells: Vec<(usize, usize)> = self
+            .targets
+            .iter()
+            .filter_map(|t| match *t {
+                ProbeTarget::Cell(x, y) if (x0..x0 + nx).contains(&x) => Some((x - x0, y)),
+                _ => None,
+            })
+            .collect();
         let mut mine = Vec::new();
-        for target in &self.targets {
-            if let ProbeTarget::Cell(x, y) = *target {
-                if (x0..x0 + nx).contains(&x) {
-                    let (rho, u) = self.lattice.sample(x - x0, y);
-                    mine.extend([
-                        self.units.velocity_to_si(u[0]),
-                        self.units.velocity_to_si(u[1]),
-                        self.units.drho_to_pressure(rho - 1.0),
-                    ]);
-                }
-            }
+        for (rho, u) in self.fluid.sample(&cells) {
+            mine.extend([
+                self.units.velocity_to_si(u[0]),
+                self.units.velocity_to_si(u[1]),
+                self.units.drho_to_pressure(rho - 1.0),
+            ]);
         }
         // Owned point probes of rank 0, then rank 1, …: reassemble in scene order.
         let all = comm.all_gather_f64(&mine);
@@ -287,8 +307,7 @@ impl<T: Real> Simulation<T> {
 
     /// This slab's fields at the current step (exchanged halos refreshed first). Collective.
     pub fn fields(&mut self, comm: &dyn Comm) -> Fields {
-        self.lattice.refresh_exchange(comm);
-        self.lattice.fields()
+        self.fluid.fields(comm)
     }
 
     /// Totals over the whole lattice from this slab's `f`; same bits on any rank count.
@@ -362,7 +381,7 @@ impl<T: Real> Simulation<T> {
 
     /// Fluid cells of the whole lattice. Collective.
     pub fn fluid_cells(&self, comm: &dyn Comm) -> usize {
-        let mut n = [self.lattice.fluid_cells() as f64];
+        let mut n = [self.fluid.lattice().fluid_cells() as f64];
         comm.sum_f64(&mut n);
         n[0] as usize
     }

@@ -8,6 +8,7 @@
 //! run a scalar path that reconstructs their links first.
 
 pub mod aligned;
+pub mod backend;
 pub mod boundary;
 pub mod collision;
 pub mod d2q9;
@@ -19,6 +20,7 @@ pub mod lanes;
 pub mod lattice;
 pub mod real;
 
+pub use backend::FluidBackend;
 pub use collision::{Collision, CollisionParams};
 pub use lattice::{Lattice, LatticeSetup, StepError};
 pub use real::Real;

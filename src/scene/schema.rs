@@ -263,6 +263,10 @@ pub struct Run {
     /// "f32" or "f64" (default f64); the CLI may override.
     #[serde(default)]
     pub precision: Precision,
+    /// Device of the fluid solver: "cpu" (rayon, the default) or "gpu" (wgpu); the CLI's
+    /// `--backend` overrides.
+    #[serde(default)]
+    pub backend: Backend,
     /// Snapshot (HDF5 + PNG) every this many steps; 0 = only at the end.
     #[serde(default)]
     pub output_every: u64,
@@ -308,6 +312,17 @@ pub enum Precision {
     /// Double.
     #[default]
     F64,
+}
+
+/// The device that runs the fluid solver.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// rayon threads on the CPU.
+    #[default]
+    Cpu,
+    /// wgpu compute kernels (Vulkan; Mesa lavapipe where there is no GPU).
+    Gpu,
 }
 
 /// A field written to snapshots.

@@ -37,6 +37,7 @@ fn run_valid(
         steps: None,
         progress: false,
         restart: None,
+        backend: None,
     };
     let s = run(scene, &opts).unwrap_or_else(|e| panic!("{e}"));
     (s, out)

@@ -1,0 +1,10 @@
+//! The wgpu backend: device discovery ([`context`]), the WGSL kernels (`lbm.wgsl`) and the
+//! GPU fluid solver ([`fluid::GpuFluid`]), which implements
+//! [`crate::lbm::FluidBackend`] on one rank's slab.
+
+pub mod buffers;
+pub mod context;
+pub mod fluid;
+
+pub use context::{list_adapters, AdapterSummary, GpuContext, GpuError};
+pub use fluid::GpuFluid;

@@ -1,0 +1,80 @@
+//! The fluid solver behind one coarse trait, so that the device that runs it (rayon on
+//! the CPU, wgpu on a GPU) is chosen at run time. Precision stays a type parameter.
+
+use super::fields::Fields;
+use super::lattice::{Lattice, StepError};
+use super::real::Real;
+use decomposition::Comm;
+
+/// One rank's fluid solver. The [`Lattice`] it exposes always holds the geometry, the
+/// step count and the counters; its populations are current only on the CPU backend
+/// (a device backend copies them to the host when asked, e.g. by `export_interior`).
+pub trait FluidBackend<T: Real> {
+    /// Short description of the device ("cpu", "gpu: NVIDIA H100 (Vulkan)").
+    fn device(&self) -> String;
+    /// Geometry, step count and halo counters of this rank's slab.
+    fn lattice(&self) -> &Lattice<T>;
+    /// Fused stream–collide with bounce-back and Zou–He links and the halo exchange.
+    /// Collective. A device backend may report an instability a few steps late (at its
+    /// next check), always with the step and cell where it first appeared.
+    fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError>;
+    /// Refill local halos (periodic, free-slip, outflow).
+    fn update_boundaries(&mut self);
+    /// Scale every Zou–He velocity face from the next step on (start-up ramps).
+    fn set_inlet_scale(&mut self, factor: f64);
+    /// Make sure no instability has happened so far (before output that must be good).
+    /// Collective.
+    fn check(&mut self, comm: &dyn Comm) -> Result<(), StepError>;
+    /// Momentum-exchange force on every solid during the last step (lattice units); the
+    /// same reduction order on any rank count. Collective.
+    fn forces(&mut self, comm: &dyn Comm) -> Vec<[f64; 2]>;
+    /// Density and velocity of local fluid cells (x, y), lattice units.
+    fn sample(&mut self, cells: &[(usize, usize)]) -> Vec<(f64, [f64; 2])>;
+    /// All local fields at the current step (exchanged halos refreshed first). Collective.
+    fn fields(&mut self, comm: &dyn Comm) -> Fields;
+    /// Interior populations `[9][ny][nx]` (checkpoints).
+    fn export_interior(&mut self) -> Vec<T>;
+    /// Replace the state with `data` after `step` steps (restart).
+    fn import_interior(&mut self, data: &[T], step: u64);
+}
+
+impl<T: Real> FluidBackend<T> for Lattice<T> {
+    fn device(&self) -> String {
+        format!("cpu ({} rayon threads)", rayon::current_num_threads())
+    }
+    fn lattice(&self) -> &Lattice<T> {
+        self
+    }
+    fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
+        Lattice::stream_collide(self, comm)
+    }
+    fn update_boundaries(&mut self) {
+        Lattice::update_boundaries(self)
+    }
+    fn set_inlet_scale(&mut self, factor: f64) {
+        Lattice::set_inlet_scale(self, factor)
+    }
+    fn check(&mut self, _comm: &dyn Comm) -> Result<(), StepError> {
+        // The CPU sweep checks every step.
+        Ok(())
+    }
+    fn forces(&mut self, comm: &dyn Comm) -> Vec<[f64; 2]> {
+        Lattice::forces(self, comm)
+    }
+    fn sample(&mut self, cells: &[(usize, usize)]) -> Vec<(f64, [f64; 2])> {
+        cells
+            .iter()
+            .map(|&(x, y)| Lattice::sample(self, x, y))
+            .collect()
+    }
+    fn fields(&mut self, comm: &dyn Comm) -> Fields {
+        self.refresh_exchange(comm);
+        Lattice::fields(self)
+    }
+    fn export_interior(&mut self) -> Vec<T> {
+        Lattice::export_interior(self)
+    }
+    fn import_interior(&mut self, data: &[T], step: u64) {
+        Lattice::import_interior(self, data, step)
+    }
+}
