@@ -305,7 +305,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
             error = Some(e.to_string());
             break;
         }
-        let probe = step % run.probe_every == 0;
+        let probe = step % run.probe_every == 0 && sim.has_probes();
         let output = (run.output_every > 0 && step % run.output_every == 0) || step == n;
         if probe || output {
             // A device backend checks for instabilities every few steps; nothing is

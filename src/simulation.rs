@@ -232,6 +232,11 @@ impl<T: Real> Simulation<T> {
         Ok(())
     }
 
+    /// Whether the scene has probes to record.
+    pub fn has_probes(&self) -> bool {
+        !self.targets.is_empty()
+    }
+
     /// Make sure the state is good before it is recorded (a device backend checks for
     /// instabilities only every few steps). Collective.
     pub fn check(&mut self, comm: &dyn Comm) -> Result<(), StepError> {

@@ -22,7 +22,7 @@ struct Geo {
     stride: u32,
     plane: u32,
     ns: u32,
-    step: u32,
+    _pad0: u32,
     faces: u32,
     peers: u32,
     types_at: u32,
@@ -31,12 +31,13 @@ struct Geo {
     _pad: u32,
 }
 
-/// Byte offset of `Geo::step`.
-const GEO_STEP_OFFSET: u64 = 20;
 /// Index of the inlet ramp factor in the real parameters (`P_INLET`).
 const P_INLET: usize = 10;
 /// Check the device's instability flag every this many steps (and before any output).
-const CHECK_EVERY: u64 = 32;
+const CHECK_EVERY: u64 = 64;
+/// Steps queued in one submission on a single rank (amortises the submission cost on
+/// small lattices; several ranks submit every step because of the halo exchange).
+const BATCH: usize = 16;
 /// Largest read-back chunk.
 const READBACK_BYTES: usize = 64 << 20;
 
@@ -49,6 +50,7 @@ struct Pipelines {
     unpack: wgpu::ComputePipeline,
     moments_all: wgpu::ComputePipeline,
     moments_list: wgpu::ComputePipeline,
+    advance: wgpu::ComputePipeline,
 }
 
 /// A cell list bound as group 1.
@@ -64,7 +66,6 @@ pub struct GpuFluid<T: Real> {
     split: Split,
     pops: [Vec<wgpu::Buffer>; 2],
     geo: Geo,
-    geo_buf: wgpu::Buffer,
     prm_buf: wgpu::Buffer,
     aux_buf: wgpu::Buffer,
     bad_buf: wgpu::Buffer,
@@ -77,6 +78,9 @@ pub struct GpuFluid<T: Real> {
     probes: Option<(Vec<(usize, usize)>, CellList)>,
     pipes: Pipelines,
     nslots: usize,
+    /// Steps recorded but not yet submitted.
+    pending: Option<wgpu::CommandEncoder>,
+    pending_steps: usize,
 }
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -158,23 +162,20 @@ impl<T: Real> GpuFluid<T> {
         for (k, &t) in host.types.iter().enumerate() {
             geom[words + k] = t as u32;
         }
-        // Cell lists in force-slot order: per row, special cells then edge cells.
+        // Cell lists in force-slot order (as on the CPU): per row, special cells then edge
+        // cells. Edge cells are computed after the halo exchange.
         let mut inner = vec![[0u32; 2]];
         let mut edge = vec![[0u32; 2]];
         for (y, row) in host.plan.iter().enumerate() {
             let first = host.forces.row_start[y];
             for (j, &x) in row.special.iter().enumerate() {
-                inner.push([
-                    ((y + 1) * stride + x as usize + 1) as u32,
-                    (first + j) as u32,
-                ]);
+                let k = (y + 1) * stride + x as usize + 1;
+                inner.push([k as u32, (first + j) as u32]);
             }
             let first = first + row.special.len();
             for (j, &x) in row.edge.iter().enumerate() {
-                edge.push([
-                    ((y + 1) * stride + x as usize + 1) as u32,
-                    (first + j) as u32,
-                ]);
+                let k = (y + 1) * stride + x as usize + 1;
+                edge.push([k as u32, (first + j) as u32]);
             }
         }
         let nslots = host.forces.row_start[ny];
@@ -206,7 +207,7 @@ impl<T: Real> GpuFluid<T> {
             stride: stride as u32,
             plane: plane as u32,
             ns: ns as u32,
-            step: host.step as u32,
+            _pad0: 0,
             faces,
             peers,
             types_at: words as u32,
@@ -237,10 +238,11 @@ impl<T: Real> GpuFluid<T> {
         q.write_buffer(&geo_buf, 0, bytemuck::bytes_of(&geo));
         q.write_buffer(&prm_buf, 0, &to_bytes(&prm));
         q.write_buffer(&geom_buf, 0, bytemuck::cast_slice(&geom));
+        let counter = host.step as u32;
         q.write_buffer(
             &bad_buf,
             0,
-            bytemuck::cast_slice(&[u32::MAX, u32::MAX, 0, 0]),
+            bytemuck::cast_slice(&[u32::MAX, u32::MAX, counter, 0]),
         );
         q.write_buffer(&inner_buf, 0, bytemuck::cast_slice(&inner));
         q.write_buffer(&edge_buf, 0, bytemuck::cast_slice(&edge));
@@ -332,7 +334,6 @@ impl<T: Real> GpuFluid<T> {
             split,
             pops,
             geo,
-            geo_buf,
             prm_buf,
             aux_buf,
             bad_buf,
@@ -344,6 +345,8 @@ impl<T: Real> GpuFluid<T> {
             probes: None,
             pipes,
             nslots,
+            pending: None,
+            pending_steps: 0,
         };
         gpu.upload();
         Ok(gpu)
@@ -437,6 +440,7 @@ impl<T: Real> GpuFluid<T> {
             unpack: make("unpack_halo"),
             moments_all: make("moments_all"),
             moments_list: make("moments_list"),
+            advance: make("advance_step"),
         }
     }
 
@@ -480,6 +484,14 @@ impl<T: Real> GpuFluid<T> {
 
     fn encoder(&self) -> wgpu::CommandEncoder {
         self.ctx.device.create_command_encoder(&Default::default())
+    }
+
+    /// Submit the queued steps.
+    fn flush(&mut self) {
+        if let Some(enc) = self.pending.take() {
+            self.ctx.queue.submit([enc.finish()]);
+        }
+        self.pending_steps = 0;
     }
 
     /// Record one dispatch of `pipe` with lattice group `g` and cell list `list`.
@@ -621,50 +633,28 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
 
     fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
         let cur = self.host.cur;
-        self.geo.step = self.host.step as u32;
-        self.ctx.queue.write_buffer(
-            &self.geo_buf,
-            GEO_STEP_OFFSET,
-            bytemuck::bytes_of(&self.geo.step),
-        );
-        let mut enc = self.encoder();
+        let mut enc = self.pending.take().unwrap_or_else(|| self.encoder());
         let (nx, ny) = (self.host.nx, self.host.ny);
-        self.dispatch(
-            &mut enc,
-            &self.pipes.bulk,
-            cur,
-            &self.inner,
-            cell_groups(nx, ny),
-        );
+        self.dispatch(&mut enc, &self.pipes.bulk, cur, &self.inner, cell_groups(nx, ny));
         if self.inner.len > 0 {
-            self.dispatch(
-                &mut enc,
-                &self.pipes.list,
-                cur,
-                &self.inner,
-                job_groups(self.inner.len),
-            );
+            let groups = job_groups(self.inner.len);
+            self.dispatch(&mut enc, &self.pipes.list, cur, &self.inner, groups);
         }
         if self.has_peers() {
             // Inner cells run on the device while the halos travel.
             let waited = self.exchange(comm, Some(enc));
             self.host.halo_wait_s += waited;
-            let mut enc = self.encoder();
+            enc = self.encoder();
             let rows = job_groups(ny + 2);
             self.dispatch(&mut enc, &self.pipes.unpack, cur ^ 1, &self.inner, rows);
             if self.edge.len > 0 {
-                self.dispatch(
-                    &mut enc,
-                    &self.pipes.list,
-                    cur,
-                    &self.edge,
-                    job_groups(self.edge.len),
-                );
+                let groups = job_groups(self.edge.len);
+                self.dispatch(&mut enc, &self.pipes.list, cur, &self.edge, groups);
             }
-            self.ctx.queue.submit([enc.finish()]);
-        } else {
-            self.ctx.queue.submit([enc.finish()]);
         }
+        self.dispatch(&mut enc, &self.pipes.advance, cur, &self.inner, (1, 1));
+        self.pending = Some(enc);
+        self.pending_steps += 1;
         self.host.step += 1;
         self.host.cur ^= 1;
         if self.host.step % CHECK_EVERY == 0 {
@@ -677,28 +667,34 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         // The fill kernels write the destination binding: the group whose destination is
         // the (new) current buffer.
         let g = self.host.cur ^ 1;
-        let mut enc = self.encoder();
-        self.dispatch(
-            &mut enc,
-            &self.pipes.fill_x,
-            g,
-            &self.inner,
-            job_groups(self.host.ny),
-        );
-        self.dispatch(
-            &mut enc,
-            &self.pipes.fill_y,
-            g,
-            &self.inner,
-            job_groups(self.host.stride),
-        );
-        self.ctx.queue.submit([enc.finish()]);
+        let mut enc = self.pending.take().unwrap_or_else(|| self.encoder());
+        let (rows, columns) = (job_groups(self.host.ny), job_groups(self.host.stride));
+        // Only faces filled from the interior need a kernel (walls and open faces do not).
+        let filled = |f: &FaceCondition| {
+            matches!(
+                f,
+                FaceCondition::Periodic | FaceCondition::FreeSlip | FaceCondition::Outflow
+            )
+        };
+        let faces = &self.host.faces;
+        if filled(&faces[0]) || filled(&faces[1]) {
+            self.dispatch(&mut enc, &self.pipes.fill_x, g, &self.inner, rows);
+        }
+        if filled(&faces[2]) || filled(&faces[3]) {
+            self.dispatch(&mut enc, &self.pipes.fill_y, g, &self.inner, columns);
+        }
+        self.pending = Some(enc);
+        if self.pending_steps >= BATCH || self.has_peers() {
+            self.flush();
+        }
     }
 
     fn set_inlet_scale(&mut self, factor: f64) {
         if factor == self.host.inlet_scale {
             return;
         }
+        // Queued steps must still see the old factor.
+        self.flush();
         self.host.inlet_scale = factor;
         let v = to_bytes(&[T::from_f64(factor)]);
         self.ctx
@@ -707,6 +703,7 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
     }
 
     fn check(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
+        self.flush();
         let bad = self.first_bad();
         if !comm.any(bad.is_some()) {
             return Ok(());
@@ -729,6 +726,7 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
     }
 
     fn forces(&mut self, comm: &dyn Comm) -> Vec<[f64; 2]> {
+        self.flush();
         let n = self.nslots * self.host.solids.len();
         if n > 0 {
             let v = self.aux_values(0, 2 * n);
@@ -743,6 +741,7 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         if cells.is_empty() {
             return Vec::new();
         }
+        self.flush();
         self.probe_list(cells);
         let (_, list) = self.probes.as_ref().expect("probe list just built");
         let mut enc = self.encoder();
@@ -756,6 +755,7 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
     }
 
     fn fields(&mut self, comm: &dyn Comm) -> Fields {
+        self.flush();
         self.refresh_exchange(comm);
         let (nx, ny) = (self.host.nx, self.host.ny);
         let mut enc = self.encoder();
@@ -785,6 +785,7 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
     }
 
     fn export_interior(&mut self) -> Vec<T> {
+        self.flush();
         let cur = self.host.cur;
         let per = self.split.planes_per_part() * self.host.plane;
         for j in 0..self.split.parts {
@@ -795,11 +796,13 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
     }
 
     fn import_interior(&mut self, data: &[T], step: u64) {
+        self.flush();
         self.host.import_interior(data, step);
+        let counter = step as u32;
         self.ctx.queue.write_buffer(
             &self.bad_buf,
             0,
-            bytemuck::cast_slice(&[u32::MAX, u32::MAX]),
+            bytemuck::cast_slice(&[u32::MAX, u32::MAX, counter, 0]),
         );
         self.upload();
     }
@@ -812,7 +815,6 @@ mod tests {
     #[test]
     fn geo_matches_the_wgsl_layout() {
         assert_eq!(std::mem::size_of::<Geo>(), 48);
-        assert_eq!(std::mem::offset_of!(Geo, step) as u64, GEO_STEP_OFFSET);
     }
 
     #[test]

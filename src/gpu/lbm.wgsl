@@ -19,8 +19,7 @@ struct Geo {
     plane: u32,
     // Solids (force slots per special cell).
     ns: u32,
-    // Steps done before the one being computed.
-    step: u32,
+    _pad0: u32,
     // Face kinds, 8 bits each (west, east, south, north): see FACE_*.
     faces: u32,
     // Bit 0: the west halo is exchanged with a peer; bit 1: the east halo.
@@ -65,22 +64,24 @@ const P_SOLIDS: u32 = 16u;
 @group(0) @binding(2) var<storage, read> geom: array<u32>;
 // Force slots, halo staging and moment output (offsets in `geo`).
 @group(0) @binding(3) var<storage, read_write> aux: array<real>;
-// First unstable step and the first bad cell (y·nx + x) in it.
-@group(0) @binding(4) var<storage, read_write> bad: array<atomic<u32>, 2>;
+// First unstable step, the first bad cell (y·nx + x) in it, and the step counter (steps
+// done before the one being computed; advanced on the device so that many steps can be
+// queued in one submission).
+@group(0) @binding(4) var<storage, read_write> bad: array<atomic<u32>, 4>;
 // Cell lists: entry 0 holds the count; then (padded cell, force slot) or (x, y).
 @group(1) @binding(0) var<storage, read> list: array<vec2<u32>>;
 
-var<private> CX: array<i32, 9> = array<i32, 9>(0, 1, 0, -1, 0, 1, -1, -1, 1);
-var<private> CY: array<i32, 9> = array<i32, 9>(0, 0, 1, 0, -1, 1, 1, -1, -1);
-var<private> OPP: array<u32, 9> = array<u32, 9>(0u, 3u, 4u, 1u, 2u, 7u, 8u, 5u, 6u);
-var<private> MIRROR_X: array<u32, 9> = array<u32, 9>(0u, 3u, 2u, 1u, 4u, 6u, 5u, 8u, 7u);
-var<private> MIRROR_Y: array<u32, 9> = array<u32, 9>(0u, 1u, 4u, 3u, 2u, 8u, 7u, 6u, 5u);
-var<private> WT: array<real, 9> = array<real, 9>(
+const CX: array<i32, 9> = array<i32, 9>(0, 1, 0, -1, 0, 1, -1, -1, 1);
+const CY: array<i32, 9> = array<i32, 9>(0, 0, 1, 0, -1, 1, 1, -1, -1);
+const OPP: array<u32, 9> = array<u32, 9>(0u, 3u, 4u, 1u, 2u, 7u, 8u, 5u, 6u);
+const MIRROR_X: array<u32, 9> = array<u32, 9>(0u, 3u, 2u, 1u, 4u, 6u, 5u, 8u, 7u);
+const MIRROR_Y: array<u32, 9> = array<u32, 9>(0u, 1u, 4u, 3u, 2u, 8u, 7u, 6u, 5u);
+const WT: array<real, 9> = array<real, 9>(
     4.0 / 9.0, 1.0 / 9.0, 1.0 / 9.0, 1.0 / 9.0, 1.0 / 9.0,
     1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0);
 // Populations leaving through the west face (c_x = −1) and the east face (c_x = +1).
-var<private> WESTWARD: array<u32, 3> = array<u32, 3>(3u, 6u, 7u);
-var<private> EASTWARD: array<u32, 3> = array<u32, 3>(1u, 5u, 8u);
+const WESTWARD: array<u32, 3> = array<u32, 3>(3u, 6u, 7u);
+const EASTWARD: array<u32, 3> = array<u32, 3>(1u, 5u, 8u);
 
 fn face_kind(face: u32) -> u32 {
     return (geo.faces >> (8u * face)) & 0xFFu;
@@ -117,11 +118,18 @@ fn rot(i: u32, q: u32) -> u32 {
 
 // Record an unstable cell: only cells of the first unstable step count.
 fn flag_bad(x: u32, y: u32) {
-    if atomicLoad(&bad[0]) < geo.step {
+    let step = atomicLoad(&bad[2]);
+    if atomicLoad(&bad[0]) < step {
         return;
     }
-    atomicMin(&bad[0], geo.step);
+    atomicMin(&bad[0], step);
     atomicMin(&bad[1], y * geo.nx + x);
+}
+
+// One thread: the step is done.
+@compute @workgroup_size(1)
+fn advance_step() {
+    atomicAdd(&bad[2], 1u);
 }
 
 struct Moments {
@@ -277,10 +285,17 @@ fn pull(k: u32) -> array<real, 9> {
         ld(5u, k - s - 1u), ld(6u, k - s + 1u), ld(7u, k + s + 1u), ld(8u, k + s - 1u));
 }
 
+// Written out: a loop with a run-time index keeps `h` in memory on SIMD-per-lane drivers.
 fn store(k: u32, h: array<real, 9>) {
-    for (var i = 0u; i < 9u; i++) {
-        sto(i, k, h[i]);
-    }
+    sto(0u, k, h[0]);
+    sto(1u, k, h[1]);
+    sto(2u, k, h[2]);
+    sto(3u, k, h[3]);
+    sto(4u, k, h[4]);
+    sto(5u, k, h[5]);
+    sto(6u, k, h[6]);
+    sto(7u, k, h[7]);
+    sto(8u, k, h[8]);
 }
 
 // Velocity of an open face at position s along it, times the inlet ramp (zero when the
@@ -465,11 +480,13 @@ fn job(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.y * groups.x * 64u + gid.x;
 }
 
-// Bulk cells: every cell whose 8 neighbours are plain fluid (and not next to an
-// exchanged face). One thread per cell; rows strided over the y dispatch.
+// Bulk cells: all 8 neighbours plain fluid, not next to an exchanged face (the others
+// are in the cell lists: a SIMD-per-lane driver such as lavapipe runs a divergent
+// boundary path for every lane, which made one merged kernel 2x slower there). One thread
+// per cell; rows strided over the y dispatch.
 @compute @workgroup_size(64)
 fn sweep_bulk(@builtin(global_invocation_id) gid: vec3<u32>,
-              @builtin(num_workgroups) groups: vec3<u32>) {
+         @builtin(num_workgroups) groups: vec3<u32>) {
     let x = gid.x;
     if x >= geo.nx {
         return;
