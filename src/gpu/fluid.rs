@@ -7,8 +7,9 @@ use super::buffers::{
 };
 use super::context::{GpuContext, GpuError};
 use crate::lbm::collision::Collision;
+use crate::lbm::d2q9::{CX, CY, Q, W};
 use crate::lbm::fields::Fields;
-use crate::lbm::lattice::{FaceCondition, Lattice, StepError, HALO_DIRS};
+use crate::lbm::lattice::{FaceCondition, Lattice, StepError, FLUID, HALO_DIRS, MAX_SOLID};
 use crate::lbm::{FluidBackend, Real};
 use decomposition::{Comm, Side};
 use std::sync::Arc;
@@ -78,6 +79,9 @@ pub struct GpuFluid<T: Real> {
     probes: Option<(Vec<(usize, usize)>, CellList)>,
     pipes: Pipelines,
     nslots: usize,
+    /// Per force slot and solid: Σ −2 w_i c_i over the cell's links to that solid (the
+    /// rest-state part of the momentum exchange, added on the host in f64).
+    rest_force: Vec<[f64; 2]>,
     /// Steps recorded but not yet submitted.
     pending: Option<wgpu::CommandEncoder>,
     pending_steps: usize,
@@ -179,9 +183,24 @@ impl<T: Real> GpuFluid<T> {
             }
         }
         let nslots = host.forces.row_start[ny];
+        let ns = host.solids.len();
+        let mut rest_force = vec![[0.0f64; 2]; nslots * ns];
+        for list in [&inner, &edge] {
+            for &[k, slot] in &list[1..] {
+                for i in 1..Q {
+                    let n =
+                        (k as isize - CX[i] as isize - CY[i] as isize * stride as isize) as usize;
+                    let t = host.types[n];
+                    if t != FLUID && t <= MAX_SOLID {
+                        let f = &mut rest_force[slot as usize * ns + t as usize - 1];
+                        f[0] -= 2.0 * W[i] * CX[i] as f64;
+                        f[1] -= 2.0 * W[i] * CY[i] as f64;
+                    }
+                }
+            }
+        }
         inner[0][0] = (inner.len() - 1) as u32;
         edge[0][0] = (edge.len() - 1) as u32;
-        let ns = host.solids.len();
         let halo_at = nslots * ns * 2;
         let out_at = halo_at + 4 * HALO_DIRS * (ny + 2);
         let aux_values = out_at + 3 * nx * ny;
@@ -345,6 +364,7 @@ impl<T: Real> GpuFluid<T> {
             probes: None,
             pipes,
             nslots,
+            rest_force,
             pending: None,
             pending_steps: 0,
         };
@@ -635,7 +655,13 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         let cur = self.host.cur;
         let mut enc = self.pending.take().unwrap_or_else(|| self.encoder());
         let (nx, ny) = (self.host.nx, self.host.ny);
-        self.dispatch(&mut enc, &self.pipes.bulk, cur, &self.inner, cell_groups(nx, ny));
+        self.dispatch(
+            &mut enc,
+            &self.pipes.bulk,
+            cur,
+            &self.inner,
+            cell_groups(nx, ny),
+        );
         if self.inner.len > 0 {
             let groups = job_groups(self.inner.len);
             self.dispatch(&mut enc, &self.pipes.list, cur, &self.inner, groups);
@@ -730,8 +756,9 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         let n = self.nslots * self.host.solids.len();
         if n > 0 {
             let v = self.aux_values(0, 2 * n);
-            for (slot, f) in self.host.forces.values.iter_mut().zip(v.chunks_exact(2)) {
-                *slot = [f[0].to_f64(), f[1].to_f64()];
+            let slots = self.host.forces.values.iter_mut().zip(&self.rest_force);
+            for ((slot, rest), f) in slots.zip(v.chunks_exact(2)) {
+                *slot = [f[0].to_f64() + rest[0], f[1].to_f64() + rest[1]];
             }
         }
         self.host.forces(comm)

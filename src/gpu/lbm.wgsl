@@ -326,8 +326,9 @@ fn face_velocity(face: u32, s: u32) -> FaceVelocity {
     return FaceVelocity(true, vec2<real>(prm[at] * r, prm[at + 1u] * r));
 }
 
-// Zou & He (1997) on one face, written for the west face (eqs. 19–23) and rotated.
-fn zou_he_face(face: u32, s: u32, f: ptr<function, array<real, 9>>) {
+// Zou & He (1997) on one face, written for the west face (eqs. 19–23) and rotated, in
+// shifted populations (boundary.rs `zou_he_face`).
+fn zou_he_face(face: u32, s: u32, h: ptr<function, array<real, 9>>) {
     var q = 0u;
     if face == 1u {
         q = 2u;
@@ -338,8 +339,8 @@ fn zou_he_face(face: u32, s: u32, f: ptr<function, array<real, 9>>) {
     }
     let n = rot(1u, q);
     let t = rot(2u, q);
-    let known = (*f)[0] + (*f)[rot(2u, q)] + (*f)[rot(4u, q)]
-        + real(2.0) * ((*f)[rot(3u, q)] + (*f)[rot(6u, q)] + (*f)[rot(7u, q)]);
+    let known = (*h)[0] + (*h)[rot(2u, q)] + (*h)[rot(4u, q)]
+        + real(2.0) * ((*h)[rot(3u, q)] + (*h)[rot(6u, q)] + (*h)[rot(7u, q)]);
     var rho: real;
     var un: real;
     var ut = real(0.0);
@@ -347,22 +348,24 @@ fn zou_he_face(face: u32, s: u32, f: ptr<function, array<real, 9>>) {
     if v.ok {
         un = real(CX[n]) * v.u.x + real(CY[n]) * v.u.y;
         ut = real(CX[t]) * v.u.x + real(CY[t]) * v.u.y;
-        // ρ = [f0 + f2 + f4 + 2(f3 + f6 + f7)] / (1 − u_n) (Zou & He 1997, eq. 19).
-        rho = known / (real(1.0) - un);
+        // ρ − 1 = (Σ_known h + u_n) / (1 − u_n) (Zou & He 1997, eq. 19, shifted).
+        rho = real(1.0) + (known + un) / (real(1.0) - un);
     } else {
-        rho = real(1.0) + prm[P_PRESSURE + face];
-        // u_n = 1 − [f0 + f2 + f4 + 2(f3 + f6 + f7)] / ρ (Zou & He 1997).
-        un = real(1.0) - known / rho;
+        let d = prm[P_PRESSURE + face];
+        rho = real(1.0) + d;
+        // u_n = (δρ − Σ_known h) / ρ (Zou & He 1997, shifted).
+        un = (d - known) / rho;
     }
-    let half_diff = real(0.5) * ((*f)[rot(2u, q)] - (*f)[rot(4u, q)]);
+    let half_diff = real(0.5) * ((*h)[rot(2u, q)] - (*h)[rot(4u, q)]);
     // Zou & He 1997, eqs. 20–22.
-    (*f)[rot(1u, q)] = (*f)[rot(3u, q)] + 2.0 / 3.0 * rho * un;
-    (*f)[rot(5u, q)] = (*f)[rot(7u, q)] - half_diff + rho * un / 6.0 + 0.5 * rho * ut;
-    (*f)[rot(8u, q)] = (*f)[rot(6u, q)] + half_diff + rho * un / 6.0 - 0.5 * rho * ut;
+    (*h)[rot(1u, q)] = (*h)[rot(3u, q)] + real(2.0 / 3.0) * rho * un;
+    (*h)[rot(5u, q)] = (*h)[rot(7u, q)] - half_diff + rho * un / real(6.0) + real(0.5) * rho * ut;
+    (*h)[rot(8u, q)] = (*h)[rot(6u, q)] + half_diff + rho * un / real(6.0) - real(0.5) * rho * ut;
 }
 
-// Corner of two open faces (Zou & He 1997, sec. 4; Hecht & Harting 2010, sec. 3.2).
-fn zou_he_corner(x: u32, y: u32, xf: u32, yf: u32, f: ptr<function, array<real, 9>>) {
+// Corner of two open faces (Zou & He 1997, sec. 4; Hecht & Harting 2010, sec. 3.2), in
+// shifted populations (boundary.rs `zou_he_corner`).
+fn zou_he_corner(x: u32, y: u32, xf: u32, yf: u32, h: ptr<function, array<real, 9>>) {
     var q = 3u;
     if xf == 0u && yf == 2u {
         q = 0u;
@@ -386,19 +389,19 @@ fn zou_he_corner(x: u32, y: u32, xf: u32, yf: u32, f: ptr<function, array<real, 
     // Density of the interior neighbour along the inward diagonal.
     let dn = rot(5u, q);
     let nbr = idx(i32(x) + CX[dn], i32(y) + CY[dn]);
-    var sum = real(0.0);
+    var drho = real(0.0);
     for (var i = 0u; i < 9u; i++) {
-        sum += ld(i, nbr);
+        drho += ld(i, nbr);
     }
-    let rho = real(1.0) + sum;
-    (*f)[a] = (*f)[rot(3u, q)] + 2.0 / 3.0 * rho * ua;
-    (*f)[b] = (*f)[rot(4u, q)] + 2.0 / 3.0 * rho * ub;
-    (*f)[rot(5u, q)] = (*f)[rot(7u, q)] + rho * (ua + ub) / 6.0;
-    let rest = rho - ((*f)[0] + (*f)[a] + (*f)[b] + (*f)[rot(3u, q)] + (*f)[rot(4u, q)]
-        + (*f)[rot(5u, q)] + (*f)[rot(7u, q)]);
-    let skew = rho * (ub - ua) / 6.0;
-    (*f)[rot(6u, q)] = 0.5 * (rest + skew);
-    (*f)[rot(8u, q)] = 0.5 * (rest - skew);
+    let rho = real(1.0) + drho;
+    (*h)[a] = (*h)[rot(3u, q)] + real(2.0 / 3.0) * rho * ua;
+    (*h)[b] = (*h)[rot(4u, q)] + real(2.0 / 3.0) * rho * ub;
+    (*h)[rot(5u, q)] = (*h)[rot(7u, q)] + rho * (ua + ub) / real(6.0);
+    let known = (*h)[0] + (*h)[a] + (*h)[b] + (*h)[rot(3u, q)] + (*h)[rot(4u, q)]
+        + (*h)[rot(5u, q)] + (*h)[rot(7u, q)];
+    let skew = rho * (ub - ua) / real(6.0);
+    (*h)[rot(6u, q)] = real(0.5) * (drho - known + skew);
+    (*h)[rot(8u, q)] = real(0.5) * (drho - known - skew);
 }
 
 // Pre-collision populations of a fluid cell next to solids or open faces (boundary.rs
@@ -427,8 +430,10 @@ fn gather_special(k: u32, x: u32, y: u32, slot: u32) -> array<real, 9> {
             // Half-way bounce-back with wall velocity, ρ_w = 1 (Ladd 1994, eq. 3.3).
             h[i] = back + 6.0 * WT[i] * cu;
             if slot != NONE {
-                // The solid receives −(f*_ī + f_i) c_i (Ladd 1994).
-                let m = back + h[i] + 2.0 * WT[i];
+                // The solid receives −(f*_ī + f_i) c_i (Ladd 1994). Only the shifted part
+                // h*_ī + h_i is summed here; the host adds the −2 w_i c_i part per slot in
+                // f64 (summing 2w_i ≈ 0.2 in f32 would swamp small net forces).
+                let m = back + h[i];
                 let at = 2u * (slot * ns + t - 1u);
                 aux[at] -= m * real(CX[i]);
                 aux[at + 1u] -= m * real(CY[i]);
@@ -438,10 +443,6 @@ fn gather_special(k: u32, x: u32, y: u32, slot: u32) -> array<real, 9> {
         }
     }
     if unknown {
-        var f: array<real, 9>;
-        for (var i = 0u; i < 9u; i++) {
-            f[i] = h[i] + WT[i];
-        }
         var xf = NONE;
         var yf = NONE;
         if x == 0u && is_open(0u) {
@@ -455,14 +456,11 @@ fn gather_special(k: u32, x: u32, y: u32, slot: u32) -> array<real, 9> {
             yf = 3u;
         }
         if xf != NONE && yf != NONE {
-            zou_he_corner(x, y, xf, yf, &f);
+            zou_he_corner(x, y, xf, yf, &h);
         } else if xf != NONE {
-            zou_he_face(xf, y, &f);
+            zou_he_face(xf, y, &h);
         } else if yf != NONE {
-            zou_he_face(yf, x, &f);
-        }
-        for (var i = 0u; i < 9u; i++) {
-            h[i] = f[i] - WT[i];
+            zou_he_face(yf, x, &h);
         }
     }
     return h;

@@ -97,7 +97,8 @@ impl<T: Real> Lattice<T> {
     }
 
     /// Zou–He reconstruction of the unknown links of a cell on one open face, or on the
-    /// corner of two.
+    /// corner of two. Works on the shifted populations h = f − w in the kernel's precision:
+    /// forming f = h + w in f32 would cost two digits of the small deviations.
     fn reconstruct_open(&self, src: &[T], x: usize, y: usize, h: &mut [T; Q]) {
         let open = |f: Face| self.faces[f as usize].is_open();
         let xf = if x == 0 && open(Face::West) {
@@ -114,63 +115,63 @@ impl<T: Real> Lattice<T> {
         } else {
             None
         };
-        let mut f = [0.0f64; Q];
-        for i in 0..Q {
-            f[i] = h[i].to_f64() + W[i];
-        }
         match (xf, yf) {
-            (Some(a), Some(b)) => self.zou_he_corner(src, x, y, a, b, &mut f),
-            (Some(face), None) => self.zou_he_face(face, y, &mut f),
-            (None, Some(face)) => self.zou_he_face(face, x, &mut f),
+            (Some(a), Some(b)) => self.zou_he_corner(src, x, y, a, b, h),
+            (Some(face), None) => self.zou_he_face(face, y, h),
+            (None, Some(face)) => self.zou_he_face(face, x, h),
             (None, None) => unreachable!("open link without an open face at ({x}, {y})"),
-        }
-        for i in 0..Q {
-            h[i] = T::from_f64(f[i] - W[i]);
         }
     }
 
-    /// Prescribed velocity of an open face at position `s` along it (zero for pressure faces).
-    fn face_velocity(&self, face: Face, s: usize) -> Option<[f64; 2]> {
+    /// Prescribed velocity of an open face at position `s` along it (None for pressure faces).
+    fn face_velocity(&self, face: Face, s: usize) -> Option<[T; 2]> {
         match &self.faces[face as usize] {
-            FaceCondition::Velocity(v) => {
-                Some([v[s][0] * self.inlet_scale, v[s][1] * self.inlet_scale])
-            }
+            FaceCondition::Velocity(v) => Some([
+                T::from_f64(v[s][0] * self.inlet_scale),
+                T::from_f64(v[s][1] * self.inlet_scale),
+            ]),
             _ => None,
         }
     }
 
     /// Zou & He (1997) on one face, written for the west face (eqs. 19–23 there) and
-    /// rotated onto the others. `f` holds full populations.
-    fn zou_he_face(&self, face: Face, s: usize, f: &mut [f64; Q]) {
+    /// rotated onto the others, in shifted populations (the weights cancel in eqs. 20–22;
+    /// the known weights in eq. 19 sum to 1).
+    fn zou_he_face(&self, face: Face, s: usize, h: &mut [T; Q]) {
         let k = face.quarter_turns();
         let r = |i: usize| rotate(i, k);
         let (n, t) = (r(1), r(2));
-        let known = f[0] + f[r(2)] + f[r(4)] + 2.0 * (f[r(3)] + f[r(6)] + f[r(7)]);
+        let c = T::from_f64;
+        let one = c(1.0);
+        let known = h[0] + h[r(2)] + h[r(4)] + c(2.0) * (h[r(3)] + h[r(6)] + h[r(7)]);
         let (rho, un, ut) = match &self.faces[face as usize] {
-            FaceCondition::Velocity(v) => {
-                let u = [v[s][0] * self.inlet_scale, v[s][1] * self.inlet_scale];
-                let un = CX[n] as f64 * u[0] + CY[n] as f64 * u[1];
-                let ut = CX[t] as f64 * u[0] + CY[t] as f64 * u[1];
-                // ρ = [f0 + f2 + f4 + 2(f3 + f6 + f7)] / (1 − u_n) (Zou & He 1997, eq. 19).
-                (known / (1.0 - un), un, ut)
+            FaceCondition::Velocity(_) => {
+                let u = self.face_velocity(face, s).expect("velocity face");
+                let un = c(CX[n] as f64) * u[0] + c(CY[n] as f64) * u[1];
+                let ut = c(CX[t] as f64) * u[0] + c(CY[t] as f64) * u[1];
+                // ρ − 1 = (Σ_known h + u_n) / (1 − u_n) (Zou & He 1997, eq. 19, shifted).
+                (one + (known + un) / (one - un), un, ut)
             }
             FaceCondition::Pressure(drho) => {
-                let rho = 1.0 + drho;
-                // u_n = 1 − [f0 + f2 + f4 + 2(f3 + f6 + f7)] / ρ, u_t = 0 (Zou & He 1997).
-                (rho, 1.0 - known / rho, 0.0)
+                let d = c(*drho);
+                let rho = one + d;
+                // u_n = 1 − Σ_known f / ρ = (δρ − Σ_known h) / ρ (Zou & He 1997, shifted).
+                (rho, (d - known) / rho, c(0.0))
             }
             _ => unreachable!("zou_he_face on a closed face"),
         };
-        let half_diff = 0.5 * (f[r(2)] - f[r(4)]);
+        let half_diff = c(0.5) * (h[r(2)] - h[r(4)]);
+        let (two_thirds, sixth, half) = (c(2.0 / 3.0), c(6.0), c(0.5));
         // Zou & He 1997, eqs. 20–22 (tangential term keeps u_t).
-        f[r(1)] = f[r(3)] + 2.0 / 3.0 * rho * un;
-        f[r(5)] = f[r(7)] - half_diff + rho * un / 6.0 + 0.5 * rho * ut;
-        f[r(8)] = f[r(6)] + half_diff + rho * un / 6.0 - 0.5 * rho * ut;
+        h[r(1)] = h[r(3)] + two_thirds * rho * un;
+        h[r(5)] = h[r(7)] - half_diff + rho * un / sixth + half * rho * ut;
+        h[r(8)] = h[r(6)] + half_diff + rho * un / sixth - half * rho * ut;
     }
 
     /// Corner between two open faces (Zou & He 1997, sec. 4; Hecht & Harting 2010, sec. 3.2):
     /// density from the diagonal interior neighbour, the buried pair split to conserve mass.
-    fn zou_he_corner(&self, src: &[T], x: usize, y: usize, xf: Face, yf: Face, f: &mut [f64; Q]) {
+    /// Shifted populations: the buried pair gets ½(δρ − Σ_known h ± skew).
+    fn zou_he_corner(&self, src: &[T], x: usize, y: usize, xf: Face, yf: Face, h: &mut [T; Q]) {
         let k = match (xf, yf) {
             (Face::West, Face::South) => 0,
             (Face::East, Face::South) => 1,
@@ -178,27 +179,31 @@ impl<T: Real> Lattice<T> {
             _ => 3,
         };
         let r = |i: usize| rotate(i, k);
+        let c = T::from_f64;
+        let zero = c(0.0);
         let u = self
             .face_velocity(yf, x)
             .or_else(|| self.face_velocity(xf, y))
-            .unwrap_or([0.0, 0.0]);
+            .unwrap_or([zero, zero]);
         let (a, b) = (r(1), r(2));
-        let ua = CX[a] as f64 * u[0] + CY[a] as f64 * u[1];
-        let ub = CX[b] as f64 * u[0] + CY[b] as f64 * u[1];
+        let ua = c(CX[a] as f64) * u[0] + c(CY[a] as f64) * u[1];
+        let ub = c(CX[b] as f64) * u[0] + c(CY[b] as f64) * u[1];
         // Density of the interior neighbour along the inward diagonal (extrapolation).
         let dn = r(5);
         let nbr = self.idx(x as isize + CX[dn] as isize, y as isize + CY[dn] as isize);
-        let rho = 1.0
-            + (0..Q)
-                .map(|i| src[i * self.plane + nbr].to_f64())
-                .sum::<f64>();
-        f[r(1)] = f[r(3)] + 2.0 / 3.0 * rho * ua;
-        f[r(2)] = f[r(4)] + 2.0 / 3.0 * rho * ub;
-        f[r(5)] = f[r(7)] + rho * (ua + ub) / 6.0;
-        let rest = rho - (f[0] + f[r(1)] + f[r(2)] + f[r(3)] + f[r(4)] + f[r(5)] + f[r(7)]);
-        let skew = rho * (ub - ua) / 6.0;
-        f[r(6)] = 0.5 * (rest + skew);
-        f[r(8)] = 0.5 * (rest - skew);
+        let mut drho = zero;
+        for i in 0..Q {
+            drho += src[i * self.plane + nbr];
+        }
+        let rho = c(1.0) + drho;
+        let (two_thirds, sixth, half) = (c(2.0 / 3.0), c(6.0), c(0.5));
+        h[a] = h[r(3)] + two_thirds * rho * ua;
+        h[b] = h[r(4)] + two_thirds * rho * ub;
+        h[r(5)] = h[r(7)] + rho * (ua + ub) / sixth;
+        let known = h[0] + h[a] + h[b] + h[r(3)] + h[r(4)] + h[r(5)] + h[r(7)];
+        let skew = rho * (ub - ua) / sixth;
+        h[r(6)] = half * (drho - known + skew);
+        h[r(8)] = half * (drho - known - skew);
     }
 }
 
