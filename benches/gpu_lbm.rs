@@ -10,6 +10,7 @@ use decomposition::SingleProcess;
 use grainflow::gpu::{GpuContext, GpuFluid};
 use grainflow::lbm::lattice::{FaceCondition, LatticeSetup};
 use grainflow::lbm::{Collision, FluidBackend, Lattice, Real};
+use grainflow::scene::GpuStorage;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -96,19 +97,36 @@ fn time_steps<T: Real>(fluid: &mut dyn FluidBackend<T>, steps: usize) -> f64 {
     t.elapsed().as_secs_f64() / steps as f64
 }
 
-fn gpu_mlups<T: Real>(ctx: &Arc<GpuContext>, n: usize, steps: usize, c: Collision, bw: f64) {
-    let mut g = match GpuFluid::new(lattice::<T>(n, n, c), ctx.clone()) {
+fn gpu_mlups<T: Real>(
+    ctx: &Arc<GpuContext>,
+    n: usize,
+    steps: usize,
+    c: Collision,
+    storage: GpuStorage,
+    bw: f64,
+) {
+    let mut g = match GpuFluid::new(lattice::<T>(n, n, c), ctx.clone(), storage) {
         Ok(g) => g,
         Err(e) => {
-            println!("  {} {}: skipped ({e})", c.name(), T::NAME);
+            println!("  {} {} {storage:?}: skipped ({e})", c.name(), T::NAME);
             return;
         }
     };
     let s = time_steps(&mut g, steps);
     let mlups = (n * n) as f64 / s / 1e6;
-    let bytes = 2.0 * 9.0 * T::BYTES as f64;
+    let stored = if storage == GpuStorage::F16 {
+        2
+    } else {
+        T::BYTES
+    };
+    let bytes = 2.0 * 9.0 * stored as f64;
+    let label = if storage == GpuStorage::F16 {
+        "+f16 storage"
+    } else {
+        ""
+    };
     println!(
-        "  {:3} {}: {:9.1} MLUPS, {:7.1} GB/s at {} B/update = {:5.1} % of copy bandwidth",
+        "  {:3} {}{label}: {:9.1} MLUPS, {:7.1} GB/s at {} B/update = {:5.1} % of copy bandwidth",
         c.name(),
         T::NAME,
         mlups,
@@ -135,7 +153,12 @@ fn seed_table(ctx: &Arc<GpuContext>) {
         let s = pool.install(|| time_steps(&mut l, steps));
         rows.push((format!("CPU, {t} thread(s) (rayon)"), s * steps as f64));
     }
-    let mut g = GpuFluid::new(lattice::<f32>(nx, ny, Collision::Bgk), ctx.clone()).unwrap();
+    let mut g = GpuFluid::new(
+        lattice::<f32>(nx, ny, Collision::Bgk),
+        ctx.clone(),
+        GpuStorage::Native,
+    )
+    .unwrap();
     let s = time_steps(&mut g, steps);
     rows.push((format!("GPU: {}", ctx.adapter.name), s * steps as f64));
     println!("| device | time for {steps} iterations (s) | MLUPS | speed-up vs 1 thread |");
@@ -170,7 +193,8 @@ fn main() {
     let n = env("GRAINFLOW_BENCH_N", 2048);
     let steps = env("GRAINFLOW_BENCH_STEPS", 50);
     println!("periodic box {n} x {n}, {steps} steps:");
-    gpu_mlups::<f32>(&ctx, n, steps, Collision::Bgk, bw);
+    let native = GpuStorage::Native;
+    gpu_mlups::<f32>(&ctx, n, steps, Collision::Bgk, native, bw);
     gpu_mlups::<f32>(
         &ctx,
         n,
@@ -180,9 +204,13 @@ fn main() {
             s_eps: 1.1,
             s_q: None,
         },
+        native,
         bw,
     );
+    if ctx.adapter.f16 {
+        gpu_mlups::<f32>(&ctx, n, steps, Collision::Bgk, GpuStorage::F16, bw);
+    }
     if ctx.adapter.f64 {
-        gpu_mlups::<f64>(&ctx, n, steps, Collision::Bgk, bw);
+        gpu_mlups::<f64>(&ctx, n, steps, Collision::Bgk, native, bw);
     }
 }

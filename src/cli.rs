@@ -30,6 +30,15 @@ pub enum BackendArg {
     Gpu,
 }
 
+/// GPU population storage on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum GpuStorageArg {
+    /// The run's precision.
+    Native,
+    /// IEEE half storage, f32 arithmetic.
+    F16,
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -58,6 +67,10 @@ pub enum Command {
         /// Device of the fluid solver, overriding the scene's `[run] backend`.
         #[arg(long, value_enum)]
         backend: Option<BackendArg>,
+        /// GPU population storage, overriding the scene's `[run] gpu_storage`: `f16` halves
+        /// memory and traffic (f32 arithmetic; needs `--backend gpu --precision f32`).
+        #[arg(long, value_enum)]
+        gpu_storage: Option<GpuStorageArg>,
     },
     /// Validate a scene and print the derived lattice parameters and memory estimate.
     Check {

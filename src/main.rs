@@ -4,9 +4,9 @@ mod cli;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use cli::{BackendArg, Cli, Command, PrecisionArg};
+use cli::{BackendArg, Cli, Command, GpuStorageArg, PrecisionArg};
 use decomposition::{launched_by_mpi, Comm, MpiComm, SingleProcess};
-use grainflow::run::{run_on, step_count, Backend, Precision, RunOptions, Status};
+use grainflow::run::{run_on, step_count, Backend, GpuStorage, Precision, RunOptions, Status};
 use grainflow::scene;
 
 fn main() {
@@ -57,12 +57,13 @@ fn real_main() -> Result<i32> {
             }
             for (i, a) in adapters.iter().enumerate() {
                 println!(
-                    "  [{i}] {} — {}, {}, driver {}; f64: {}; largest storage binding {} MiB, buffer {} MiB, {} storage buffers per stage",
+                    "  [{i}] {} — {}, {}, driver {}; f64: {}, f16: {}; largest storage binding {} MiB, buffer {} MiB, {} storage buffers per stage",
                     a.name,
                     a.backend,
                     a.device_type,
                     a.driver.trim(),
                     if a.f64 { "yes" } else { "no (f32 only)" },
+                    if a.f16 { "yes" } else { "no" },
                     a.max_storage_binding >> 20,
                     a.max_buffer >> 20,
                     a.max_storage_buffers
@@ -84,6 +85,7 @@ fn real_main() -> Result<i32> {
             quiet,
             restart,
             backend,
+            gpu_storage,
         } => {
             let comm = communicator()?;
             let comm = comm.as_ref();
@@ -126,6 +128,10 @@ fn real_main() -> Result<i32> {
                 backend: backend.map(|b| match b {
                     BackendArg::Cpu => Backend::Cpu,
                     BackendArg::Gpu => Backend::Gpu,
+                }),
+                gpu_storage: gpu_storage.map(|g| match g {
+                    GpuStorageArg::Native => GpuStorage::Native,
+                    GpuStorageArg::F16 => GpuStorage::F16,
                 }),
             };
             let root = comm.is_root();

@@ -21,7 +21,7 @@ use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 use thiserror::Error;
 
-pub use crate::scene::{Backend, Precision};
+pub use crate::scene::{Backend, GpuStorage, Precision};
 
 /// Options from the command line that override or complement the scene.
 #[derive(Debug, Clone)]
@@ -32,6 +32,8 @@ pub struct RunOptions {
     pub precision: Option<Precision>,
     /// Backend override (the scene's `[run] backend` otherwise).
     pub backend: Option<Backend>,
+    /// GPU population storage override (the scene's `[run] gpu_storage` otherwise).
+    pub gpu_storage: Option<GpuStorage>,
     /// Step count override.
     pub steps: Option<u64>,
     /// Show progress (bar on a terminal, log lines otherwise).
@@ -105,6 +107,8 @@ pub struct Summary {
     pub precision: Precision,
     /// Backend used.
     pub backend: Backend,
+    /// GPU population storage used.
+    pub gpu_storage: GpuStorage,
     /// The device that ran the fluid solver (rank 0's).
     pub device: String,
     /// MPI ranks.
@@ -228,7 +232,17 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let run = &scene.scene.run;
     let n = step_count(scene, opts.steps);
     let backend = opts.backend.unwrap_or(run.backend);
-    let mut sim = Simulation::<T>::new(scene, comm, backend)?;
+    let storage = opts.gpu_storage.unwrap_or(run.gpu_storage);
+    if storage == GpuStorage::F16 && (backend != Backend::Gpu || precision != Precision::F32) {
+        return Err(SceneError::Invalid {
+            path: scene.path.clone(),
+            line: None,
+            key: "gpu_storage".into(),
+            message: "FP16 storage needs the GPU backend with f32 arithmetic: add `--backend gpu --precision f32` (or set `backend` and `precision` in [run]), or drop `gpu_storage`".into(),
+        }
+        .into());
+    }
+    let mut sim = Simulation::<T>::new(scene, comm, backend, storage)?;
     let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
     let checkpoint_path = opts.out_dir.join("checkpoint.h5");
     let mut totals_initial = None;
@@ -439,6 +453,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         warnings: scene.warnings.clone(),
         precision,
         backend,
+        gpu_storage: storage,
         device: sim.fluid.device(),
         ranks: comm.size(),
         threads: rayon::current_num_threads(),

@@ -9,7 +9,7 @@ use crate::lbm::lattice::StepError;
 use crate::lbm::{FluidBackend, Lattice, Real};
 use crate::run::RunError;
 use crate::scene::{
-    build_lattice, solid_id_of, Backend, Initial, Probe, SceneError, Units, ValidScene,
+    build_lattice, solid_id_of, Backend, GpuStorage, Initial, Probe, SceneError, Units, ValidScene,
 };
 use decomposition::{Comm, Side, SlabHalo, SlabPartition};
 use std::sync::Arc;
@@ -87,7 +87,12 @@ impl<T: Real> Simulation<T> {
     /// Allocate this rank's slab, rasterise obstacles, apply the initial condition, place
     /// probes, and move the slab to `backend`'s device. Columns are split over the ranks
     /// of `comm` by fluid-cell count.
-    pub fn new(scene: &ValidScene, comm: &dyn Comm, backend: Backend) -> Result<Self, RunError> {
+    pub fn new(
+        scene: &ValidScene,
+        comm: &dyn Comm,
+        backend: Backend,
+        storage: GpuStorage,
+    ) -> Result<Self, RunError> {
         let built = build_lattice(scene)?;
         let units = scene.units;
         let invalid = |key: &str, message: String| SceneError::Invalid {
@@ -168,7 +173,11 @@ impl<T: Real> Simulation<T> {
         lattice.update_boundaries();
         let fluid: Box<dyn FluidBackend<T>> = match backend {
             Backend::Cpu => Box::new(lattice),
-            Backend::Gpu => Box::new(GpuFluid::new(lattice, Arc::new(GpuContext::open()?))?),
+            Backend::Gpu => Box::new(GpuFluid::new(
+                lattice,
+                Arc::new(GpuContext::open()?),
+                storage,
+            )?),
         };
         let b = &scene.scene.boundaries;
         let ramp_s = [&b.west, &b.east, &b.south, &b.north]

@@ -80,26 +80,31 @@ pub const DST_BINDING: u32 = 20;
 
 /// The WGSL source for precision `real` ("f32" or "f64") and `split`: a prelude with the
 /// population bindings and their accessors, then the kernels.
-pub fn shader_source(real: &str, split: Split) -> String {
+/// `stored` is the population storage type ("f16" with `real` = "f32" for FP16 storage).
+pub fn shader_source(real: &str, stored: &str, split: Split) -> String {
     let p = split.parts;
     let per = split.planes_per_part();
-    let mut s = format!("alias real = {real};\n");
+    let mut s = String::new();
+    if stored == "f16" {
+        s += "enable f16;\n";
+    }
+    s += &format!("alias real = {real};\nalias stored = {stored};\n");
     for j in 0..p {
         s += &format!(
-            "@group(0) @binding({}) var<storage, read> src{j}: array<real>;\n",
+            "@group(0) @binding({}) var<storage, read> src{j}: array<stored>;\n",
             SRC_BINDING as usize + j
         );
         s += &format!(
-            "@group(0) @binding({}) var<storage, read_write> dst{j}: array<real>;\n",
+            "@group(0) @binding({}) var<storage, read_write> dst{j}: array<stored>;\n",
             DST_BINDING as usize + j
         );
     }
     let body = |name: &str, ret: bool| -> String {
         if p == 1 {
             return if ret {
-                format!("return {name}0[i * geo.plane + k];")
+                format!("return real({name}0[i * geo.plane + k]);")
             } else {
-                format!("{name}0[i * geo.plane + k] = v;")
+                format!("{name}0[i * geo.plane + k] = stored(v);")
             };
         }
         let mut b = format!("let j = (i % {per}u) * geo.plane + k;\nswitch (i / {per}u) {{\n");
@@ -110,9 +115,9 @@ pub fn shader_source(real: &str, split: Split) -> String {
                 format!("case {part}u")
             };
             b += &if ret {
-                format!("{label}: {{ return {name}{part}[j]; }}\n")
+                format!("{label}: {{ return real({name}{part}[j]); }}\n")
             } else {
-                format!("{label}: {{ {name}{part}[j] = v; }}\n")
+                format!("{label}: {{ {name}{part}[j] = stored(v); }}\n")
             };
         }
         b + "}"

@@ -14,6 +14,12 @@ pub enum GpuError {
         /// Adapter name.
         adapter: String,
     },
+    /// FP16 storage was asked for on an adapter without `SHADER_F16`.
+    #[error("adapter `{adapter}` does not support 16-bit floats in shaders (SHADER_F16); use `gpu_storage = \"native\"`")]
+    NoF16 {
+        /// Adapter name.
+        adapter: String,
+    },
     /// The lattice does not fit the adapter's limits even split over 9 bindings.
     #[error("lattice too large for adapter `{adapter}`: {what}; use more ranks (each rank holds one slab) or `--backend cpu`")]
     TooLarge {
@@ -48,6 +54,8 @@ pub struct AdapterSummary {
     pub driver: String,
     /// Whether shaders may use f64.
     pub f64: bool,
+    /// Whether shaders may use f16 (for FP16 population storage).
+    pub f16: bool,
     /// Largest storage binding (bytes).
     pub max_storage_binding: u64,
     /// Largest buffer (bytes).
@@ -69,6 +77,7 @@ fn summary(a: &wgpu::Adapter) -> AdapterSummary {
         device_type: format!("{:?}", info.device_type),
         driver: format!("{} {}", info.driver, info.driver_info),
         f64: a.features().contains(wgpu::Features::SHADER_F64),
+        f16: a.features().contains(wgpu::Features::SHADER_F16),
         max_storage_binding: limits.max_storage_buffer_binding_size,
         max_buffer: limits.max_buffer_size,
         max_storage_buffers: limits.max_storage_buffers_per_shader_stage,
@@ -136,7 +145,8 @@ impl GpuContext {
         .ok_or(GpuError::NoAdapter)?;
         let summary = summary(&adapter);
         let limits = adapter.limits();
-        let features = adapter.features() & wgpu::Features::SHADER_F64;
+        let features =
+            adapter.features() & (wgpu::Features::SHADER_F64 | wgpu::Features::SHADER_F16);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("grainflow"),
             required_features: features,

@@ -11,6 +11,7 @@ use crate::lbm::d2q9::{CX, CY, Q, W};
 use crate::lbm::fields::Fields;
 use crate::lbm::lattice::{FaceCondition, Lattice, StepError, FLUID, HALO_DIRS, MAX_SOLID};
 use crate::lbm::{FluidBackend, Real};
+use crate::scene::GpuStorage;
 use decomposition::{Comm, Side};
 use std::sync::Arc;
 
@@ -63,6 +64,8 @@ struct CellList {
 /// The fluid solver of one rank on a GPU (see the module docs).
 pub struct GpuFluid<T: Real> {
     host: Lattice<T>,
+    /// Populations stored as IEEE half (arithmetic stays in `T` = f32).
+    f16: bool,
     ctx: Arc<GpuContext>,
     split: Split,
     pops: [Vec<wgpu::Buffer>; 2],
@@ -124,8 +127,22 @@ fn from_bytes<T: Real>(bytes: &[u8]) -> Vec<T> {
 }
 
 impl<T: Real> GpuFluid<T> {
-    /// Move `host` (initial condition applied, halos filled) onto the device of `ctx`.
-    pub fn new(host: Lattice<T>, ctx: Arc<GpuContext>) -> Result<Self, GpuError> {
+    /// Move `host` (initial condition applied, halos filled) onto the device of `ctx`,
+    /// storing populations as `pop_storage` says. Precondition: FP16 storage only with `T` = f32
+    /// (the scene layer checks).
+    pub fn new(
+        host: Lattice<T>,
+        ctx: Arc<GpuContext>,
+        pop_storage: GpuStorage,
+    ) -> Result<Self, GpuError> {
+        let f16 = pop_storage == GpuStorage::F16;
+        assert!(!f16 || T::BYTES == 4, "FP16 storage needs f32 arithmetic");
+        if f16 && !ctx.adapter.f16 {
+            return Err(GpuError::NoF16 {
+                adapter: ctx.adapter.name.clone(),
+            });
+        }
+        let pop_bytes = if f16 { 2 } else { T::BYTES };
         if T::BYTES == 8 && !ctx.adapter.f64 {
             return Err(GpuError::NoF64 {
                 adapter: ctx.adapter.name.clone(),
@@ -133,7 +150,7 @@ impl<T: Real> GpuFluid<T> {
         }
         let dev = &ctx.device;
         let (nx, ny, stride, plane) = (host.nx, host.ny, host.stride, host.plane);
-        let split = Split::choose(plane, T::BYTES, &ctx)?;
+        let split = Split::choose(plane, pop_bytes, &ctx)?;
         let per = split.planes_per_part();
         let usage = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_DST
@@ -146,7 +163,7 @@ impl<T: Real> GpuFluid<T> {
                 mapped_at_creation: false,
             })
         };
-        let part_bytes = round16(per * plane * T::BYTES);
+        let part_bytes = round16(per * plane * pop_bytes);
         let pops: [Vec<wgpu::Buffer>; 2] = std::array::from_fn(|b| {
             (0..split.parts)
                 .map(|j| make(&format!("populations {b}.{j}"), part_bytes))
@@ -346,9 +363,10 @@ impl<T: Real> GpuFluid<T> {
         };
         let inner = list_group(&inner_buf, inner.len() - 1);
         let edge = list_group(&edge_buf, edge.len() - 1);
-        let pipes = Self::pipelines(&ctx, split, &host, &lattice_layout, &list_layout);
+        let pipes = Self::pipelines(&ctx, split, f16, &host, &lattice_layout, &list_layout);
         let mut gpu = Self {
             host,
+            f16,
             ctx,
             split,
             pops,
@@ -413,6 +431,7 @@ impl<T: Real> GpuFluid<T> {
     fn pipelines(
         ctx: &GpuContext,
         split: Split,
+        f16: bool,
         host: &Lattice<T>,
         lattice: &wgpu::BindGroupLayout,
         list: &wgpu::BindGroupLayout,
@@ -420,7 +439,9 @@ impl<T: Real> GpuFluid<T> {
         let dev = &ctx.device;
         let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lbm.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(shader_source(T::NAME, split).into()),
+            source: wgpu::ShaderSource::Wgsl(
+                shader_source(T::NAME, if f16 { "f16" } else { T::NAME }, split).into(),
+            ),
         });
         let layout = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lbm"),
@@ -471,10 +492,34 @@ impl<T: Real> GpuFluid<T> {
             // Device buffer c holds host buffer c (host and device agree on `cur`).
             for (j, buf) in self.pops[b].iter().enumerate() {
                 let values = &self.host.buf[b][j * per..(j + 1) * per];
-                self.ctx.queue.write_buffer(buf, 0, &to_bytes(values));
+                self.ctx
+                    .queue
+                    .write_buffer(buf, 0, &self.pops_to_bytes(values));
             }
         }
         self.ctx.queue.submit([]);
+    }
+
+    /// Populations as the device stores them.
+    fn pops_to_bytes(&self, values: &[T]) -> Vec<u8> {
+        if !self.f16 {
+            return to_bytes(values);
+        }
+        values
+            .iter()
+            .flat_map(|v| half::f16::from_f64(v.to_f64()).to_le_bytes())
+            .collect()
+    }
+
+    /// Inverse of [`GpuFluid::pops_to_bytes`].
+    fn pops_from_bytes(&self, bytes: &[u8]) -> Vec<T> {
+        if !self.f16 {
+            return from_bytes(bytes);
+        }
+        bytes
+            .chunks_exact(2)
+            .map(|b| T::from_f64(half::f16::from_le_bytes([b[0], b[1]]).to_f64()))
+            .collect()
     }
 
     /// Read `bytes` bytes of `buffer` from `offset`, through the read-back buffer in chunks.
@@ -644,7 +689,11 @@ impl<T: Real> GpuFluid<T> {
 impl<T: Real> FluidBackend<T> for GpuFluid<T> {
     fn device(&self) -> String {
         let a = &self.ctx.adapter;
-        format!("gpu: {} ({}, {})", a.name, a.backend, a.device_type)
+        let storage = if self.f16 { ", f16 storage" } else { "" };
+        format!(
+            "gpu: {} ({}, {}{storage})",
+            a.name, a.backend, a.device_type
+        )
     }
 
     fn lattice(&self) -> &Lattice<T> {
@@ -816,7 +865,8 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         let cur = self.host.cur;
         let per = self.split.planes_per_part() * self.host.plane;
         for j in 0..self.split.parts {
-            let v: Vec<T> = from_bytes(&self.download(&self.pops[cur][j], 0, per * T::BYTES));
+            let bytes = per * if self.f16 { 2 } else { T::BYTES };
+            let v = self.pops_from_bytes(&self.download(&self.pops[cur][j], 0, bytes));
             self.host.buf[cur][j * per..(j + 1) * per].copy_from_slice(&v);
         }
         self.host.export_interior()

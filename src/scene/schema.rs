@@ -267,6 +267,10 @@ pub struct Run {
     /// `--backend` overrides.
     #[serde(default)]
     pub backend: Backend,
+    /// How the GPU stores populations: "native" (the run's precision, the default) or
+    /// "f16" (IEEE half, arithmetic in f32; needs `backend = "gpu"` and `precision = "f32"`).
+    #[serde(default)]
+    pub gpu_storage: GpuStorage,
     /// Snapshot (HDF5 + PNG) every this many steps; 0 = only at the end.
     #[serde(default)]
     pub output_every: u64,
@@ -323,6 +327,18 @@ pub enum Backend {
     Cpu,
     /// wgpu compute kernels (Vulkan; Mesa lavapipe where there is no GPU).
     Gpu,
+}
+
+/// Storage of the populations on the GPU.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GpuStorage {
+    /// The run's precision.
+    #[default]
+    Native,
+    /// IEEE binary16 storage with f32 arithmetic (Lehmann et al. 2022, "FP16S"): half the
+    /// memory and memory traffic of f32.
+    F16,
 }
 
 /// A field written to snapshots.

@@ -38,6 +38,7 @@ fn run_valid(
         progress: false,
         restart: None,
         backend: None,
+        gpu_storage: None,
     };
     let s = run(scene, &opts).unwrap_or_else(|e| panic!("{e}"));
     (s, out)
