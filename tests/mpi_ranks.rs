@@ -276,7 +276,8 @@ fn sigterm_writes_a_checkpoint_and_the_restart_matches_an_uninterrupted_run() {
 }
 
 /// GPU slabs exchange their halos through the host (pack kernel, MPI, unpack kernel) while
-/// the inner cells run; 2 and 3 GPU ranks give the same bits as 1 GPU rank.
+/// the inner cells run; 2 and 3 GPU ranks give the same bits as 1 GPU rank, and so does a
+/// GPU checkpoint restarted on another rank count.
 #[test]
 fn gpu_backend_on_2_and_3_ranks_matches_1_gpu_rank() {
     if grainflow::gpu::list_adapters().is_empty() {
@@ -298,6 +299,20 @@ fn gpu_backend_on_2_and_3_ranks_matches_1_gpu_rank() {
             assert!(j["device"].as_str().unwrap().starts_with("gpu"));
             assert_eq!(j["ranks"], n);
             assert_bit_identical(&one, &many);
+        }
+        // A GPU checkpoint (read back from the device) restarts on other ranks: stop at
+        // step 200 on 2 GPU ranks, continue on 3.
+        if scene.ends_with("mpi_channel.toml") {
+            let split = d.path().join("split");
+            let mut args = gpu.to_vec();
+            args.extend(["--steps", "200"]);
+            run_ok(2, scene, &split, &args);
+            let ck = split.join("checkpoint.h5");
+            let mut args = gpu.to_vec();
+            args.extend(["--restart", ck.to_str().unwrap()]);
+            run_ok(3, scene, &split, &args);
+            assert_eq!(summary(&split)["restarted_from_step"], 200);
+            assert_bit_identical(&one, &split);
         }
     }
 }
