@@ -72,17 +72,7 @@ fn compare_stored<T: Real>(scene_path: &str, steps: usize, tolerance: f64, stora
         ("density", rel_diff(&a.rho, &b.rho)),
     ];
     let full = |h: Vec<T>, ny: usize, nx: usize| -> Vec<f64> {
-        let w = [
-            4.0 / 9.0,
-            1.0 / 9.0,
-            1.0 / 9.0,
-            1.0 / 9.0,
-            1.0 / 9.0,
-            1.0 / 36.0,
-            1.0 / 36.0,
-            1.0 / 36.0,
-            1.0 / 36.0,
-        ];
+        let w = grainflow::lbm::d2q9::W;
         h.iter()
             .enumerate()
             .map(|(k, v)| v.to_f64() + w[k / (ny * nx)])

@@ -2,8 +2,14 @@
 
 use super::context::{GpuContext, GpuError};
 
-/// The kernels, without the prelude.
-const KERNELS: &str = include_str!("lbm.wgsl");
+/// The kernels, without the prelude: bindings and helpers, collision, boundary links,
+/// entry points (one WGSL module once concatenated).
+const KERNELS: [&str; 4] = [
+    include_str!("shaders/common.wgsl"),
+    include_str!("shaders/collide.wgsl"),
+    include_str!("shaders/boundaries.wgsl"),
+    include_str!("shaders/kernels.wgsl"),
+];
 
 /// How the two population buffers are split over storage bindings: `parts` bindings per
 /// buffer, `9 / parts` planes each.
@@ -134,7 +140,7 @@ pub fn shader_source(real: &str, stored: &str, split: Split) -> String {
         "fn sto(i: u32, k: u32, v: real) {{\n{}\n}}\n",
         body("dst", false)
     );
-    s + KERNELS
+    s + &KERNELS.concat()
 }
 
 /// Bytes rounded up to a multiple of 16 (copies need multiples of 4; 16 keeps vec4 alignment).

@@ -1,4 +1,4 @@
-//! The wgpu backend: device discovery ([`context`]), the WGSL kernels (`lbm.wgsl`) and the
+//! The wgpu backend: device discovery ([`context`]), the WGSL kernels (`shaders/*.wgsl`) and the
 //! GPU fluid solver ([`fluid::GpuFluid`]), which implements
 //! [`crate::lbm::FluidBackend`] on one rank's slab.
 

@@ -90,8 +90,10 @@ struct Transfer {
 
 impl Transfer {
     fn new(ds: &hdf5::Dataset, block: &Block, access: Access) -> hdf5::Result<Self> {
+        // HDF5 is not thread-safe: raw calls hold the crate's library lock like its own
+        // calls do (tests and callers may write files from several threads).
         // SAFETY: plain HDF5 C calls on valid ids; every id made here is closed in Drop.
-        unsafe {
+        hdf5::sync::sync(|| unsafe {
             let mem = H5Screate_simple(
                 block.count.len() as i32,
                 block.count.as_ptr(),
@@ -120,18 +122,18 @@ impl Transfer {
                 return Err("cannot request collective MPI-IO transfers".into());
             }
             Ok(t)
-        }
+        })
     }
 }
 
 impl Drop for Transfer {
     fn drop(&mut self) {
-        // SAFETY: ids created in `new`.
-        unsafe {
+        // SAFETY: ids created in `new`; under the library lock (see `new`).
+        hdf5::sync::sync(|| unsafe {
             H5Sclose(self.mem);
             H5Sclose(self.file);
             H5Pclose(self.xfer);
-        }
+        });
     }
 }
 
@@ -146,8 +148,9 @@ pub fn write_block<T: H5Type>(
     assert_eq!(data.len(), block.len(), "hyperslab size");
     let t = Transfer::new(ds, block, access)?;
     let mem_type = hdf5::Datatype::from_type::<T>()?;
-    // SAFETY: `data` holds exactly the selected number of values of the memory type.
-    let status = unsafe {
+    // SAFETY: `data` holds exactly the selected number of values of the memory type;
+    // under the library lock (see `Transfer::new`).
+    let status = hdf5::sync::sync(|| unsafe {
         H5Dwrite(
             ds.id(),
             mem_type.id(),
@@ -156,7 +159,7 @@ pub fn write_block<T: H5Type>(
             t.xfer,
             data.as_ptr().cast(),
         )
-    };
+    });
     if status < 0 {
         return Err(format!("H5Dwrite of a hyperslab of {} failed", ds.name()).into());
     }
@@ -174,8 +177,9 @@ pub fn read_block<T: H5Type>(
     assert_eq!(out.len(), block.len(), "hyperslab size");
     let t = Transfer::new(ds, block, access)?;
     let mem_type = hdf5::Datatype::from_type::<T>()?;
-    // SAFETY: `out` has room for exactly the selected number of values.
-    let status = unsafe {
+    // SAFETY: `out` has room for exactly the selected number of values; under the
+    // library lock (see `Transfer::new`).
+    let status = hdf5::sync::sync(|| unsafe {
         H5Dread(
             ds.id(),
             mem_type.id(),
@@ -184,7 +188,7 @@ pub fn read_block<T: H5Type>(
             t.xfer,
             out.as_mut_ptr().cast(),
         )
-    };
+    });
     if status < 0 {
         return Err(format!("H5Dread of a hyperslab of {} failed", ds.name()).into());
     }
