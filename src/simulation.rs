@@ -81,6 +81,8 @@ pub struct Simulation<T: Real> {
     pub times: StageTimes,
     /// Exchange of the velocity columns next to rank faces (for vorticity).
     field_halo: SlabHalo,
+    /// A point probe sits on a column next to a rank face, so sampling reads the halo.
+    probe_on_rank_face: bool,
 }
 
 impl<T: Real> Simulation<T> {
@@ -189,7 +191,18 @@ impl<T: Real> Simulation<T> {
             .fold(0.0, f64::max);
         let mut field_halo = SlabHalo::new(&partition, comm.rank(), false);
         field_halo.set_message_bytes(ny * 9);
+        let edges: Vec<usize> = (0..comm.size())
+            .flat_map(|r| {
+                let s = partition.slab(r);
+                [s.x_begin, s.x_end - 1]
+            })
+            .collect();
+        let probe_on_rank_face = comm.size() > 1
+            && targets
+                .iter()
+                .any(|t| matches!(*t, ProbeTarget::Cell(x, _) if edges.contains(&x)));
         let mut sim = Self {
+            probe_on_rank_face,
             fluid,
             units,
             partition,
@@ -271,6 +284,9 @@ impl<T: Real> Simulation<T> {
         } else {
             Vec::new()
         };
+        if self.probe_on_rank_face {
+            self.fluid.refresh_halos(comm);
+        }
         let (x0, nx) = (self.fluid.lattice().x_offset(), self.fluid.lattice().nx());
         let cells: Vec<(usize, usize)> = self
             .targets

@@ -316,3 +316,52 @@ fn gpu_backend_on_2_and_3_ranks_matches_1_gpu_rank() {
         }
     }
 }
+
+/// Point probes on the columns either side of every rank face: a probe there reads the
+/// exchanged halo, which must be current when probes are sampled. The probe series on 2
+/// and 3 ranks are the same bytes as on 1 rank.
+#[test]
+fn probes_next_to_rank_faces_match_one_rank() {
+    let d = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(root().join("tests/scenes/mpi_channel.toml")).unwrap();
+    // The partitions of 2 and 3 ranks (fluid-weighted), from one-step runs.
+    let mut columns = Vec::new();
+    for n in [2, 3] {
+        let out = d.path().join(format!("part{n}"));
+        run_ok(n, "tests/scenes/mpi_channel.toml", &out, &["--steps", "1"]);
+        for slab in summary(&out)["partition"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .skip(1)
+        {
+            let x0 = slab[0].as_u64().unwrap() as usize;
+            columns.extend([x0 - 1, x0]);
+        }
+    }
+    let mut text = base.replace("output_every = 100", "output_every = 0");
+    for x in &columns {
+        // Cell centres at y = 0.35 m (fluid, between the cylinder and the lid).
+        text += &format!(
+            "\n[[probes]]\nkind = \"point\"\nname = \"edge{x}\"\nposition_m = [{}, 0.35]\n",
+            (*x as f64 + 0.5) * 0.01
+        );
+    }
+    let scene = d.path().join("edge_probes.toml");
+    std::fs::write(&scene, text).unwrap();
+    let scene = scene.to_str().unwrap();
+    let one = d.path().join("np1");
+    run_ok(1, scene, &one, &["--steps", "60"]);
+    for n in [2, 3] {
+        let many = d.path().join(format!("np{n}"));
+        run_ok(n, scene, &many, &["--steps", "60"]);
+        for x in &columns {
+            let name = format!("probe_edge{x}.csv");
+            let (a, b) = (
+                std::fs::read(one.join(&name)).unwrap(),
+                std::fs::read(many.join(&name)).unwrap(),
+            );
+            assert!(a == b, "{name} differs between 1 and {n} ranks");
+        }
+    }
+}

@@ -433,6 +433,11 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         self.host.forces(comm)
     }
 
+    fn refresh_halos(&mut self, comm: &dyn Comm) {
+        self.flush();
+        self.refresh_exchange(comm);
+    }
+
     fn sample(&mut self, cells: &[(usize, usize)]) -> Vec<(f64, [f64; 2])> {
         if cells.is_empty() {
             return Vec::new();

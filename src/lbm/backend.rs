@@ -28,7 +28,11 @@ pub trait FluidBackend<T: Real> {
     /// Momentum-exchange force on every solid during the last step (lattice units); the
     /// same reduction order on any rank count. Collective.
     fn forces(&mut self, comm: &dyn Comm) -> Vec<[f64; 2]>;
-    /// Density and velocity of local fluid cells (x, y), lattice units.
+    /// Fill the exchanged halos of the current state (before sampling cells next to a
+    /// rank face). Collective.
+    fn refresh_halos(&mut self, comm: &dyn Comm);
+    /// Density and velocity of local fluid cells (x, y), lattice units. Cells next to a
+    /// rank face read the exchanged halo: call [`FluidBackend::refresh_halos`] first.
     fn sample(&mut self, cells: &[(usize, usize)]) -> Vec<(f64, [f64; 2])>;
     /// All local fields at the current step (exchanged halos refreshed first). Collective.
     fn fields(&mut self, comm: &dyn Comm) -> Fields;
@@ -60,6 +64,9 @@ impl<T: Real> FluidBackend<T> for Lattice<T> {
     }
     fn forces(&mut self, comm: &dyn Comm) -> Vec<[f64; 2]> {
         Lattice::forces(self, comm)
+    }
+    fn refresh_halos(&mut self, comm: &dyn Comm) {
+        self.refresh_exchange(comm);
     }
     fn sample(&mut self, cells: &[(usize, usize)]) -> Vec<(f64, [f64; 2])> {
         cells
