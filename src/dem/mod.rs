@@ -1,0 +1,21 @@
+//! Discrete element method for 2-D disks (seed study, chapters 4–5): linear spring–dashpot
+//! normal contacts with damping from a coefficient of restitution, Cundall–Strack tangential
+//! springs with Coulomb friction, optional rolling resistance, straight walls (which may
+//! move), gravity, velocity-Verlet integration, and a deterministic O(N) cell list.
+//!
+//! Units are SI. Disks have unit depth: mass m = ρ π r² (kg per metre of depth), moment of
+//! inertia I = ½ m r².
+//!
+//! This is the serial/rayon core of the DEM issue. Scenes, output, checkpoints, ghost
+//! grains and migration over ranks, and the column-collapse validation build on it.
+
+pub mod cells;
+pub mod contact;
+pub mod grains;
+pub mod system;
+pub mod walls;
+
+pub use contact::{ContactModel, DemError};
+pub use grains::Grains;
+pub use system::DemSystem;
+pub use walls::Wall;

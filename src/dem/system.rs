@@ -1,0 +1,282 @@
+//! A DEM system: grains, walls, contact law, gravity and the velocity-Verlet step.
+
+use super::cells::CellList;
+use super::contact::{contact_force, ContactForce, ContactModel, DemError};
+use super::grains::Grains;
+use super::walls::Wall;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Key bit that marks a grain–wall contact in the history (wall index in the low bits).
+const WALL_KEY: u64 = 1 << 63;
+
+/// One grain–wall contact: wall index, unit normal from the wall to the grain, force, overlap.
+type WallHit = (usize, [f64; 2], ContactForce, f64);
+
+/// Default fraction λ of the critical time step (seed eq. 5.60).
+pub const DEFAULT_LAMBDA: f64 = 0.1;
+
+/// Grains, walls and the contact law of one rank, advanced by velocity Verlet.
+#[derive(Debug, Clone)]
+pub struct DemSystem {
+    /// The grains.
+    pub grains: Grains,
+    /// The walls.
+    pub walls: Vec<Wall>,
+    /// Contact law between grains (walls use their own friction).
+    pub model: ContactModel,
+    /// Gravity (m/s²).
+    pub gravity: [f64; 2],
+    /// Global viscous damping α (1/s): the force −α m v, seed eq. 5.57 with c = α m. Off (0)
+    /// by default.
+    pub global_damping: f64,
+    /// Time step (s).
+    pub dt: f64,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// Tangential stretch of every active contact, keyed by (grain id, grain id) with the
+    /// smaller id first, or (grain id, WALL_KEY | wall index).
+    history: HashMap<(u64, u64), f64>,
+    /// Elastic energy stored in the contacts at the last force evaluation (J/m).
+    elastic: f64,
+    /// Active contacts at the last force evaluation.
+    contacts: usize,
+}
+
+impl DemSystem {
+    /// Build a system. Errors when a parameter is out of range, when `dt` exceeds λ·Δt_cr
+    /// (eq. 5.59–5.60 for the lightest grain), or when grains overlap and `allow_overlap`
+    /// is false. Forces are evaluated once, so the first step starts from them.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        grains: Grains,
+        walls: Vec<Wall>,
+        model: ContactModel,
+        gravity: [f64; 2],
+        dt: f64,
+        lambda: f64,
+        allow_overlap: bool,
+    ) -> Result<Self, DemError> {
+        model.validate()?;
+        if !(lambda > 0.0 && lambda <= 1.0) {
+            return Err(DemError::Parameter {
+                name: "lambda",
+                value: lambda,
+                why: "must be in (0, 1]",
+            });
+        }
+        let m_min = grains.m.iter().cloned().fold(f64::INFINITY, f64::min);
+        let limit = lambda * model.critical_time_step(m_min);
+        let stable = dt > 0.0 && dt <= limit;
+        if !grains.is_empty() && !stable {
+            return Err(DemError::TimeStepTooLarge { dt, limit, lambda });
+        }
+        if !allow_overlap {
+            let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
+            if let Some(&(i, j)) = CellList::build(&grains, 2.0 * rmax)
+                .touching_pairs(&grains)
+                .first()
+            {
+                let (a, b) = (i as usize, j as usize);
+                let d = (grains.x[b] - grains.x[a]).hypot(grains.y[b] - grains.y[a]);
+                return Err(DemError::Overlap {
+                    a: grains.id[a],
+                    b: grains.id[b],
+                    overlap: grains.r[a] + grains.r[b] - d,
+                });
+            }
+        }
+        let mut s = Self {
+            grains,
+            walls,
+            model,
+            gravity,
+            global_damping: 0.0,
+            dt,
+            time: 0.0,
+            steps: 0,
+            history: HashMap::new(),
+            elastic: 0.0,
+            contacts: 0,
+        };
+        s.compute_forces();
+        Ok(s)
+    }
+
+    /// The largest stable time step λ·Δt_cr for these grains and contacts.
+    pub fn stable_time_step(&self, lambda: f64) -> f64 {
+        let m_min = self.grains.m.iter().cloned().fold(f64::INFINITY, f64::min);
+        lambda * self.model.critical_time_step(m_min)
+    }
+
+    /// One velocity-Verlet step: half kick, drift, walls move, forces, half kick.
+    pub fn step(&mut self) {
+        let dt = self.dt;
+        self.kick(0.5 * dt);
+        let g = &mut self.grains;
+        for i in 0..g.len() {
+            g.x[i] += dt * g.vx[i];
+            g.y[i] += dt * g.vy[i];
+            g.theta[i] += dt * g.omega[i];
+        }
+        for w in &mut self.walls {
+            w.advance(dt);
+        }
+        self.time += dt;
+        self.compute_forces();
+        self.kick(0.5 * dt);
+        self.steps += 1;
+    }
+
+    fn kick(&mut self, h: f64) {
+        let g = &mut self.grains;
+        for i in 0..g.len() {
+            g.vx[i] += h * g.fx[i] / g.m[i];
+            g.vy[i] += h * g.fy[i] / g.m[i];
+            g.omega[i] += h * g.torque[i] * g.inv_inertia[i];
+        }
+    }
+
+    /// Contacts active at the last force evaluation.
+    pub fn contacts(&self) -> usize {
+        self.contacts
+    }
+
+    /// Kinetic + gravitational potential + elastic contact energy (J/m).
+    pub fn energy(&self) -> f64 {
+        let g = &self.grains;
+        let potential: f64 = (0..g.len())
+            .map(|i| -g.m[i] * (self.gravity[0] * g.x[i] + self.gravity[1] * g.y[i]))
+            .sum();
+        g.kinetic_energy() + potential + self.elastic
+    }
+
+    /// Forces and torques on every grain at the current positions (velocities as they are,
+    /// i.e. at the half step inside `step`). Pair forces are computed in parallel and summed
+    /// in pair-list order, so the result does not depend on the thread count.
+    fn compute_forces(&mut self) {
+        let g = &self.grains;
+        let n = g.len();
+        let rmax = g.r.iter().cloned().fold(0.0, f64::max);
+        let pairs = CellList::build(g, 2.0 * rmax).touching_pairs(g);
+        let (model, dt, history) = (&self.model, self.dt, &self.history);
+        let results: Vec<([f64; 2], ContactForce, f64)> = pairs
+            .par_iter()
+            .with_min_len(256)
+            .map(|&(i, j)| {
+                let (i, j) = (i as usize, j as usize);
+                let (dx, dy) = (g.x[j] - g.x[i], g.y[j] - g.y[i]);
+                let dist = dx.hypot(dy);
+                let nrm = [dx / dist, dy / dist];
+                let delta = g.r[i] + g.r[j] - dist;
+                // Contact-point velocities: v + ω × (±r n).
+                let vi = [
+                    g.vx[i] - g.omega[i] * g.r[i] * nrm[1],
+                    g.vy[i] + g.omega[i] * g.r[i] * nrm[0],
+                ];
+                let vj = [
+                    g.vx[j] + g.omega[j] * g.r[j] * nrm[1],
+                    g.vy[j] - g.omega[j] * g.r[j] * nrm[0],
+                ];
+                let rel = [vj[0] - vi[0], vj[1] - vi[1]];
+                let vn = rel[0] * nrm[0] + rel[1] * nrm[1];
+                let vt = -rel[0] * nrm[1] + rel[1] * nrm[0];
+                let m_eff = g.m[i] * g.m[j] / (g.m[i] + g.m[j]);
+                let key = (g.id[i].min(g.id[j]), g.id[i].max(g.id[j]));
+                let old = history.get(&key).copied().unwrap_or(0.0);
+                // The stretch is stored for the smaller id as body 1: flip it otherwise.
+                let sign = if g.id[i] < g.id[j] { 1.0 } else { -1.0 };
+                let mut c =
+                    contact_force(model, delta, vn, vt, m_eff, model.friction, sign * old, dt);
+                c.stretch *= sign;
+                (nrm, c, delta)
+            })
+            .collect();
+        let wall_hits: Vec<Vec<WallHit>> = (0..n)
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|i| self.wall_contacts(i))
+            .collect();
+        let g = &mut self.grains;
+        for i in 0..n {
+            g.fx[i] = g.m[i] * (self.gravity[0] - self.global_damping * g.vx[i]);
+            g.fy[i] = g.m[i] * (self.gravity[1] - self.global_damping * g.vy[i]);
+            g.torque[i] = 0.0;
+        }
+        let mut history = HashMap::with_capacity(pairs.len() + n / 4);
+        let mut elastic = 0.0;
+        let (kn, kt) = (self.model.kn, self.model.kt);
+        for (&(i, j), (nrm, c, delta)) in pairs.iter().zip(&results) {
+            let (i, j) = (i as usize, j as usize);
+            let f = [
+                c.fn_ * nrm[0] - c.ft * nrm[1],
+                c.fn_ * nrm[1] + c.ft * nrm[0],
+            ];
+            g.fx[j] += f[0];
+            g.fy[j] += f[1];
+            g.fx[i] -= f[0];
+            g.fy[i] -= f[1];
+            g.torque[i] -= g.r[i] * c.ft;
+            g.torque[j] -= g.r[j] * c.ft;
+            let key = (g.id[i].min(g.id[j]), g.id[i].max(g.id[j]));
+            history.insert(key, c.stretch);
+            elastic += 0.5 * kn * delta * delta + 0.5 * kt * c.stretch * c.stretch;
+        }
+        let mut contacts = pairs.len();
+        for (i, hits) in wall_hits.into_iter().enumerate() {
+            for (w, nrm, c, delta) in hits {
+                g.fx[i] += c.fn_ * nrm[0] - c.ft * nrm[1];
+                g.fy[i] += c.fn_ * nrm[1] + c.ft * nrm[0];
+                g.torque[i] -= g.r[i] * c.ft;
+                history.insert((g.id[i], WALL_KEY | w as u64), c.stretch);
+                elastic += 0.5 * kn * delta * delta + 0.5 * kt * c.stretch * c.stretch;
+                contacts += 1;
+            }
+        }
+        self.history = history;
+        self.elastic = elastic;
+        self.contacts = contacts;
+    }
+
+    /// Contacts of grain `i` with the walls: (wall, normal from wall to grain, force, overlap).
+    fn wall_contacts(&self, i: usize) -> Vec<WallHit> {
+        let g = &self.grains;
+        let mut out = Vec::new();
+        for (w, wall) in self.walls.iter().enumerate() {
+            let c = wall.closest_point([g.x[i], g.y[i]]);
+            let (dx, dy) = (g.x[i] - c[0], g.y[i] - c[1]);
+            let dist = dx.hypot(dy);
+            let delta = g.r[i] - dist;
+            if !(delta > 0.0) || dist == 0.0 {
+                continue;
+            }
+            let nrm = [dx / dist, dy / dist];
+            // The grain's contact point is at −r n from its centre.
+            let v = [
+                g.vx[i] + g.omega[i] * g.r[i] * nrm[1] - wall.velocity[0],
+                g.vy[i] - g.omega[i] * g.r[i] * nrm[0] - wall.velocity[1],
+            ];
+            let vn = v[0] * nrm[0] + v[1] * nrm[1];
+            let vt = -v[0] * nrm[1] + v[1] * nrm[0];
+            let old = self
+                .history
+                .get(&(g.id[i], WALL_KEY | w as u64))
+                .copied()
+                .unwrap_or(0.0);
+            let f = contact_force(
+                &self.model,
+                delta,
+                vn,
+                vt,
+                g.m[i],
+                wall.friction,
+                old,
+                self.dt,
+            );
+            out.push((w, nrm, f, delta));
+        }
+        out
+    }
+}
