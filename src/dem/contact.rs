@@ -26,6 +26,16 @@ pub enum DemError {
         /// Overlap (m).
         overlap: f64,
     },
+    /// A grain file could not be read.
+    #[error("{path}:{line}: {message}")]
+    Input {
+        /// File.
+        path: String,
+        /// 1-based line (0: the whole file).
+        line: usize,
+        /// What is wrong and what to do.
+        message: String,
+    },
     /// A parameter is out of range.
     #[error("DEM parameter `{name}` = {value}: {why}")]
     Parameter {

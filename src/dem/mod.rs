@@ -12,10 +12,12 @@
 pub mod cells;
 pub mod contact;
 pub mod grains;
+pub mod sample;
 pub mod system;
 pub mod walls;
 
 pub use contact::{ContactModel, DemError};
 pub use grains::Grains;
+pub use sample::{load_csv, random_sequential_addition, settle, SizeDistribution};
 pub use system::DemSystem;
 pub use walls::Wall;

@@ -1,0 +1,217 @@
+//! Preparing a sample: random sequential addition in a rectangle, settling under gravity, and
+//! a loader for CSV files of (x, y, r).
+
+use super::contact::DemError;
+use super::grains::Grains;
+use super::system::DemSystem;
+use std::path::Path;
+
+/// Grain radii to draw (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SizeDistribution {
+    /// One radius.
+    Mono {
+        /// Radius (m).
+        r: f64,
+    },
+    /// Two radii; `fraction_small` of the grains (by number) take `small`.
+    Bidisperse {
+        /// Small radius (m).
+        small: f64,
+        /// Large radius (m).
+        large: f64,
+        /// Number fraction of small grains in [0, 1].
+        fraction_small: f64,
+    },
+    /// Uniform in [min, max].
+    Uniform {
+        /// Smallest radius (m).
+        min: f64,
+        /// Largest radius (m).
+        max: f64,
+    },
+    /// Normal with `mean` and `std`, redrawn until inside [min, max].
+    Normal {
+        /// Mean radius (m).
+        mean: f64,
+        /// Standard deviation (m).
+        std: f64,
+        /// Smallest radius (m).
+        min: f64,
+        /// Largest radius (m).
+        max: f64,
+    },
+}
+
+impl SizeDistribution {
+    /// The largest radius it can draw.
+    pub fn max_radius(&self) -> f64 {
+        match *self {
+            SizeDistribution::Mono { r } => r,
+            SizeDistribution::Bidisperse { small, large, .. } => small.max(large),
+            SizeDistribution::Uniform { max, .. } | SizeDistribution::Normal { max, .. } => max,
+        }
+    }
+
+    fn draw(&self, rng: &mut Rng) -> f64 {
+        match *self {
+            SizeDistribution::Mono { r } => r,
+            SizeDistribution::Bidisperse {
+                small,
+                large,
+                fraction_small,
+            } => {
+                if rng.uniform() < fraction_small {
+                    small
+                } else {
+                    large
+                }
+            }
+            SizeDistribution::Uniform { min, max } => min + (max - min) * rng.uniform(),
+            SizeDistribution::Normal {
+                mean,
+                std,
+                min,
+                max,
+            } => loop {
+                // Box–Muller.
+                let (u, v) = (rng.uniform().max(1e-300), rng.uniform());
+                let r = mean + std * (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos();
+                if (min..=max).contains(&r) {
+                    break r;
+                }
+            },
+        }
+    }
+}
+
+/// A small deterministic generator (SplitMix64), so a seed always gives the same sample.
+#[derive(Debug, Clone)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// Seeded generator.
+    pub fn new(seed: u64) -> Self {
+        Rng(seed)
+    }
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        (z ^ (z >> 31)) as f64 / 18_446_744_073_709_551_616.0
+    }
+}
+
+/// Fill the rectangle `[lo, hi]` (m) with non-overlapping disks of density `rho` by random
+/// sequential addition until the solid fraction reaches `solid_fraction` or `attempts`
+/// consecutive positions fail for the next radius (radii are placed in the order drawn, so
+/// the sample follows `sizes`). Grains lie wholly inside the rectangle. Deterministic in `seed`.
+pub fn random_sequential_addition(
+    lo: [f64; 2],
+    hi: [f64; 2],
+    sizes: SizeDistribution,
+    rho: f64,
+    solid_fraction: f64,
+    seed: u64,
+    attempts: usize,
+) -> Grains {
+    let mut rng = Rng::new(seed);
+    let cell = 2.0 * sizes.max_radius();
+    let nx = ((hi[0] - lo[0]) / cell).ceil().max(1.0) as usize;
+    let ny = ((hi[1] - lo[1]) / cell).ceil().max(1.0) as usize;
+    let mut grid: Vec<Vec<u32>> = vec![Vec::new(); nx * ny];
+    let mut g = Grains::default();
+    let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
+    let mut filled = 0.0;
+    let mut failures = 0;
+    // A radius is kept until it is placed: redrawing after a failed try would favour small
+    // grains as the box fills, and the sample would no longer follow `sizes`.
+    let mut r = sizes.draw(&mut rng);
+    while filled < solid_fraction * area && failures < attempts {
+        let x = lo[0] + r + (hi[0] - lo[0] - 2.0 * r) * rng.uniform();
+        let y = lo[1] + r + (hi[1] - lo[1] - 2.0 * r) * rng.uniform();
+        let cx = (((x - lo[0]) / cell) as usize).min(nx - 1);
+        let cy = (((y - lo[1]) / cell) as usize).min(ny - 1);
+        let mut free = true;
+        'search: for yy in cy.saturating_sub(1)..(cy + 2).min(ny) {
+            for xx in cx.saturating_sub(1)..(cx + 2).min(nx) {
+                for &j in &grid[yy * nx + xx] {
+                    let j = j as usize;
+                    let reach = r + g.r[j];
+                    if (g.x[j] - x).powi(2) + (g.y[j] - y).powi(2) < reach * reach {
+                        free = false;
+                        break 'search;
+                    }
+                }
+            }
+        }
+        if free {
+            let i = g.push([x, y], r, rho, false);
+            grid[cy * nx + cx].push(i as u32);
+            filled += std::f64::consts::PI * r * r;
+            failures = 0;
+            r = sizes.draw(&mut rng);
+        } else {
+            failures += 1;
+        }
+    }
+    g
+}
+
+/// Run `system` with global damping `alpha` (1/s) until the mean kinetic energy per grain
+/// falls below `ke_per_grain` (J/m) or `max_steps` pass; the damping is switched off
+/// afterwards. Returns the steps taken.
+pub fn settle(system: &mut DemSystem, alpha: f64, ke_per_grain: f64, max_steps: u64) -> u64 {
+    let before = system.global_damping;
+    system.global_damping = alpha;
+    let n = system.grains.len().max(1) as f64;
+    let mut steps = 0;
+    while steps < max_steps {
+        for _ in 0..100 {
+            system.step();
+        }
+        steps += 100;
+        if system.grains.kinetic_energy() / n < ke_per_grain {
+            break;
+        }
+    }
+    system.global_damping = before;
+    steps
+}
+
+/// Grains from a CSV file of `x, y, r` rows (m), density `rho`. A first line that does not
+/// parse as numbers is taken as a header; `#` starts a comment.
+pub fn load_csv(path: &Path, rho: f64) -> Result<Grains, DemError> {
+    let text = std::fs::read_to_string(path).map_err(|e| DemError::Input {
+        path: path.display().to_string(),
+        line: 0,
+        message: e.to_string(),
+    })?;
+    let mut g = Grains::default();
+    for (k, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let values: Result<Vec<f64>, _> = fields.iter().map(|f| f.parse::<f64>()).collect();
+        match values {
+            Ok(v) if v.len() == 3 && v[2] > 0.0 && v.iter().all(|x| x.is_finite()) => {
+                g.push([v[0], v[1]], v[2], rho, false);
+            }
+            Err(_) if k == 0 => continue,
+            _ => {
+                return Err(DemError::Input {
+                    path: path.display().to_string(),
+                    line: k + 1,
+                    message: format!(
+                        "expected `x, y, r` with finite numbers and r > 0, found `{raw}`"
+                    ),
+                })
+            }
+        }
+    }
+    Ok(g)
+}
