@@ -80,12 +80,10 @@ impl CellList {
             return Vec::new();
         }
         let (nx, ny) = (self.nx as isize, self.ny as isize);
-        (0..self.nx * self.ny)
+        // One task per row of cells (one allocation per row, not per cell).
+        (0..self.ny)
             .into_par_iter()
-            .with_min_len(64)
-            .flat_map_iter(|c| {
-                let (cx, cy) = ((c % self.nx) as isize, (c / self.nx) as isize);
-                let mine = self.cell(c);
+            .flat_map_iter(|row| {
                 let mut out = Vec::new();
                 let mut test = |i: u32, j: u32| {
                     let (a, b) = (i as usize, j as usize);
@@ -96,20 +94,24 @@ impl CellList {
                         out.push((i.min(j), i.max(j)));
                     }
                 };
-                for (k, &i) in mine.iter().enumerate() {
-                    for &j in &mine[k + 1..] {
-                        test(i, j);
-                    }
-                }
-                for (dx, dy) in [(1, 0), (1, 1), (0, 1), (-1, 1)] {
-                    let (ox, oy) = (cx + dx, cy + dy);
-                    if ox < 0 || ox >= nx || oy >= ny {
-                        continue;
-                    }
-                    let other = self.cell((oy * nx + ox) as usize);
-                    for &i in mine {
-                        for &j in other {
+                for c in row * self.nx..(row + 1) * self.nx {
+                    let (cx, cy) = ((c % self.nx) as isize, (c / self.nx) as isize);
+                    let mine = self.cell(c);
+                    for (k, &i) in mine.iter().enumerate() {
+                        for &j in &mine[k + 1..] {
                             test(i, j);
+                        }
+                    }
+                    for (dx, dy) in [(1, 0), (1, 1), (0, 1), (-1, 1)] {
+                        let (ox, oy) = (cx + dx, cy + dy);
+                        if ox < 0 || ox >= nx || oy >= ny {
+                            continue;
+                        }
+                        let other = self.cell((oy * nx + ox) as usize);
+                        for &i in mine {
+                            for &j in other {
+                                test(i, j);
+                            }
                         }
                     }
                 }

@@ -89,7 +89,13 @@ impl ContactModel {
 
     /// Normal damping coefficient c_n = 2ζ√(m* k_n) for effective mass m* (kg/m).
     pub fn damping(&self, m_eff: f64) -> f64 {
-        2.0 * self.damping_ratio() * (m_eff * self.kn).sqrt()
+        self.damping_with(self.damping_ratio(), m_eff)
+    }
+
+    /// c_n for a precomputed damping ratio ζ (saves a logarithm per contact).
+    #[inline]
+    pub fn damping_with(&self, zeta: f64, m_eff: f64) -> f64 {
+        2.0 * zeta * (m_eff * self.kn).sqrt()
     }
 
     /// Critical time step of the lightest mass `m_min`: Δt_cr = 2(√(1+ξ²) − ξ)/ω with
@@ -120,8 +126,8 @@ pub struct ContactForce {
 }
 
 /// The contact law for overlap `delta` (m), normal relative velocity `vn` (m/s, negative
-/// when approaching), tangential relative velocity `vt`, effective mass `m_eff`, friction
-/// `mu`, previous stretch `stretch`, over `dt` (s).
+/// when approaching), tangential relative velocity `vt`, normal damping `cn` (from
+/// [`ContactModel::damping`]), friction `mu`, previous stretch `stretch`, over `dt` (s).
 /// Normal: F_n = k_n δ − c_n v_n (seed eq. 5.58 plus the dashpot); tangential: ξ += v_t Δt,
 /// F_t = −k_t ξ capped at μ|F_n| (Cundall & Strack 1979), the spring reset on sliding.
 #[allow(clippy::too_many_arguments)]
@@ -131,12 +137,12 @@ pub fn contact_force(
     delta: f64,
     vn: f64,
     vt: f64,
-    m_eff: f64,
+    cn: f64,
     mu: f64,
     stretch: History,
     dt: f64,
 ) -> ContactForce {
-    let fn_ = model.kn * delta - model.damping(m_eff) * vn;
+    let fn_ = model.kn * delta - cn * vn;
     let mut xi = stretch + vt * dt;
     let mut ft = -model.kt * xi;
     let limit = mu * fn_.abs();
@@ -178,7 +184,7 @@ mod tests {
             restitution: 1.0,
             friction: 0.5,
         };
-        let c = contact_force(&m, 1e-3, 0.0, 1.0, 1.0, 0.5, 0.0, 1e-3);
+        let c = contact_force(&m, 1e-3, 0.0, 1.0, m.damping(1.0), 0.5, 0.0, 1e-3);
         assert!((c.fn_ - 10.0).abs() < 1e-12);
         assert!((c.ft + 5.0).abs() < 1e-12, "{}", c.ft);
         assert!((c.stretch - 5e-4).abs() < 1e-15);
