@@ -53,6 +53,7 @@ fn run(nx: usize, ny: usize, threads: usize, steps: usize) -> (f64, f64, usize) 
             kt: 0.5e5,
             restitution: 0.5,
             friction: 0.5,
+            rolling_friction: 0.0,
         };
         let dt = 1e-7;
         let mut s = DemSystem::new(g, walls, model, [0.0, 0.0], dt, 0.1, true).unwrap();

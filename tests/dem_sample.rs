@@ -80,6 +80,7 @@ fn settling_under_gravity_comes_to_rest() {
         kt: 0.5e5,
         restitution: 0.5,
         friction: 0.5,
+        rolling_friction: 0.0,
     };
     let probe = DemSystem::new(
         g.clone(),

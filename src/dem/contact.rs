@@ -59,6 +59,10 @@ pub struct ContactModel {
     pub restitution: f64,
     /// Coulomb friction coefficient μ between grains.
     pub friction: f64,
+    /// Rolling friction coefficient μ_r: a torque μ_r R* |F_n| against the relative
+    /// rotation (R* = r_i r_j / (r_i + r_j), r for a wall), never reversing it within a step
+    /// (constant directional torque, Ai et al. 2011, model A). 0 switches it off.
+    pub rolling_friction: f64,
 }
 
 impl ContactModel {
@@ -76,6 +80,9 @@ impl ContactModel {
         }
         if !(self.friction >= 0.0) {
             return bad("friction", self.friction, "must be ≥ 0");
+        }
+        if !(self.rolling_friction >= 0.0) {
+            return bad("rolling_friction", self.rolling_friction, "must be ≥ 0");
         }
         Ok(())
     }
@@ -169,6 +176,7 @@ mod tests {
                 kt: 0.0,
                 restitution: e,
                 friction: 0.0,
+                rolling_friction: 0.0,
             };
             let z = m.damping_ratio();
             let back = (-z * std::f64::consts::PI / (1.0 - z * z).sqrt()).exp();
@@ -183,6 +191,7 @@ mod tests {
             kt: 1e4,
             restitution: 1.0,
             friction: 0.5,
+            rolling_friction: 0.0,
         };
         let c = contact_force(&m, 1e-3, 0.0, 1.0, m.damping(1.0), 0.5, 0.0, 1e-3);
         assert!((c.fn_ - 10.0).abs() < 1e-12);

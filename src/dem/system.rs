@@ -235,7 +235,7 @@ impl DemSystem {
         let mut history = std::mem::take(&mut self.spare);
         history.clear();
         let mut elastic = 0.0;
-        let (kn, kt) = (self.model.kn, self.model.kt);
+        let (kn, kt, mu_r) = (self.model.kn, self.model.kt, self.model.rolling_friction);
         for (&(i, j), (nrm, c, delta)) in pairs.iter().zip(&results) {
             let (i, j) = (i as usize, j as usize);
             let f = [
@@ -248,6 +248,17 @@ impl DemSystem {
             g.fy[i] -= f[1];
             g.torque[i] -= g.r[i] * c.ft;
             g.torque[j] -= g.r[j] * c.ft;
+            if mu_r > 0.0 {
+                let r_eff = g.r[i] * g.r[j] / (g.r[i] + g.r[j]);
+                let m = rolling_torque(
+                    mu_r * r_eff * c.fn_.abs(),
+                    g.omega[i] - g.omega[j],
+                    g.inv_inertia[i] + g.inv_inertia[j],
+                    self.dt,
+                );
+                g.torque[i] += m;
+                g.torque[j] -= m;
+            }
             let key = (g.id[i].min(g.id[j]), g.id[i].max(g.id[j]));
             history.insert(key, c.stretch);
             elastic += 0.5 * kn * delta * delta + 0.5 * kt * c.stretch * c.stretch;
@@ -258,6 +269,10 @@ impl DemSystem {
                 g.fx[i] += c.fn_ * nrm[0] - c.ft * nrm[1];
                 g.fy[i] += c.fn_ * nrm[1] + c.ft * nrm[0];
                 g.torque[i] -= g.r[i] * c.ft;
+                if mu_r > 0.0 {
+                    let limit = mu_r * g.r[i] * c.fn_.abs();
+                    g.torque[i] += rolling_torque(limit, g.omega[i], g.inv_inertia[i], self.dt);
+                }
                 history.insert((g.id[i], WALL_KEY | w as u64), c.stretch);
                 elastic += 0.5 * kn * delta * delta + 0.5 * kt * c.stretch * c.stretch;
                 contacts += 1;
@@ -299,4 +314,15 @@ impl DemSystem {
         }
         out
     }
+}
+
+/// Rolling-resistance torque on the first body for relative rotation `omega_rel` (rad/s):
+/// magnitude `limit` against the rotation, but no more than stops it within one step (so it
+/// never reverses the rotation and chatters). `inv_inertia_sum` is 1/I₁ + 1/I₂.
+fn rolling_torque(limit: f64, omega_rel: f64, inv_inertia_sum: f64, dt: f64) -> f64 {
+    if omega_rel == 0.0 || inv_inertia_sum == 0.0 {
+        return 0.0;
+    }
+    let stop = omega_rel.abs() / (inv_inertia_sum * dt);
+    -limit.min(stop) * omega_rel.signum()
 }
