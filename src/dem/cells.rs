@@ -73,9 +73,15 @@ impl CellList {
         &self.order[self.start[c] as usize..self.start[c + 1] as usize]
     }
 
-    /// Every touching pair (i < j, overlap > 0), in cell order: each cell with itself, then
-    /// with its E, NE, N and NW neighbours (each pair of cells visited once).
+    /// Every touching pair (i < j, overlap > 0), in cell order.
     pub fn touching_pairs(&self, g: &Grains) -> Vec<(u32, u32)> {
+        self.pairs_within(g, 0.0)
+    }
+
+    /// Every pair (i < j) closer than r_i + r_j + `skin`, in cell order: each cell with
+    /// itself, then with its E, NE, N and NW neighbours (each pair of cells visited once).
+    /// Precondition: the cells were built at least 2 r_max + `skin` wide.
+    pub fn pairs_within(&self, g: &Grains, skin: f64) -> Vec<(u32, u32)> {
         if self.order.is_empty() {
             return Vec::new();
         }
@@ -89,7 +95,7 @@ impl CellList {
                     let (a, b) = (i as usize, j as usize);
                     let dx = g.x[b] - g.x[a];
                     let dy = g.y[b] - g.y[a];
-                    let reach = g.r[a] + g.r[b];
+                    let reach = g.r[a] + g.r[b] + skin;
                     if dx * dx + dy * dy < reach * reach {
                         out.push((i.min(j), i.max(j)));
                     }

@@ -1,7 +1,8 @@
 //! Discrete element method for 2-D disks (seed study, chapters 4–5): linear spring–dashpot
 //! normal contacts with damping from a coefficient of restitution, Cundall–Strack tangential
 //! springs with Coulomb friction, optional rolling resistance, straight walls (which may
-//! move), gravity, velocity-Verlet integration, and a deterministic O(N) cell list.
+//! move), gravity, velocity-Verlet integration, and a Verlet neighbour list built by a
+//! deterministic O(N) cell list.
 //!
 //! Units are SI. Disks have unit depth: mass m = ρ π r² (kg per metre of depth), moment of
 //! inertia I = ½ m r².

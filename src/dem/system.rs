@@ -59,8 +59,18 @@ pub struct DemSystem {
     pub time: f64,
     /// Steps taken.
     pub steps: u64,
-    /// Tangential stretch of every active contact, keyed by (grain id, grain id) with the
-    /// smaller id first, or (grain id, WALL_KEY | wall index).
+    /// Verlet list: grain pairs (i < j) within r_i + r_j + skin of each other when it was
+    /// built; rebuilt once a grain has moved skin/2.
+    candidates: Vec<(u32, u32)>,
+    /// Tangential stretch per candidate (0 when not in contact), for body i of (i, j).
+    stretch: Vec<f64>,
+    /// Positions when the list was built.
+    built_at: (Vec<f64>, Vec<f64>),
+    /// Verlet skin (m).
+    skin: f64,
+    /// List rebuilds so far.
+    rebuilds: u64,
+    /// Tangential stretch of every grain–wall contact, keyed by (grain id, WALL_KEY | wall).
     history: HistoryMap,
     /// The previous step's map, kept for its allocation.
     spare: HistoryMap,
@@ -122,6 +132,11 @@ impl DemSystem {
             dt,
             time: 0.0,
             steps: 0,
+            candidates: Vec::new(),
+            stretch: Vec::new(),
+            built_at: (Vec::new(), Vec::new()),
+            skin: 0.0,
+            rebuilds: 0,
             history: HistoryMap::default(),
             spare: HistoryMap::default(),
             elastic: 0.0,
@@ -183,21 +198,30 @@ impl DemSystem {
     /// i.e. at the half step inside `step`). Pair forces are computed in parallel and summed
     /// in pair-list order, so the result does not depend on the thread count.
     fn compute_forces(&mut self) {
+        if self.list_is_stale() {
+            self.rebuild_list();
+        }
         let g = &self.grains;
         let n = g.len();
-        let rmax = g.r.iter().cloned().fold(0.0, f64::max);
-        let pairs = CellList::build(g, 2.0 * rmax).touching_pairs(g);
-        let (model, dt, history) = (&self.model, self.dt, &self.history);
+        let (model, dt) = (&self.model, self.dt);
+        let stretch = &self.stretch;
         let zeta = model.damping_ratio();
-        let results: Vec<([f64; 2], ContactForce, f64)> = pairs
+        let results: Vec<Option<([f64; 2], ContactForce, f64)>> = self
+            .candidates
             .par_iter()
+            .enumerate()
             .with_min_len(256)
-            .map(|&(i, j)| {
+            .map(|(k, &(i, j))| {
                 let (i, j) = (i as usize, j as usize);
                 let (dx, dy) = (g.x[j] - g.x[i], g.y[j] - g.y[i]);
-                let dist = (dx * dx + dy * dy).sqrt();
+                let reach = g.r[i] + g.r[j];
+                let d2 = dx * dx + dy * dy;
+                if d2 >= reach * reach {
+                    return None;
+                }
+                let dist = d2.sqrt();
                 let nrm = [dx / dist, dy / dist];
-                let delta = g.r[i] + g.r[j] - dist;
+                let delta = reach - dist;
                 // Contact-point velocities: v + ω × (±r n).
                 let vi = [
                     g.vx[i] - g.omega[i] * g.r[i] * nrm[1],
@@ -211,14 +235,9 @@ impl DemSystem {
                 let vn = rel[0] * nrm[0] + rel[1] * nrm[1];
                 let vt = -rel[0] * nrm[1] + rel[1] * nrm[0];
                 let m_eff = g.m[i] * g.m[j] / (g.m[i] + g.m[j]);
-                let key = (g.id[i].min(g.id[j]), g.id[i].max(g.id[j]));
-                let old = history.get(&key).copied().unwrap_or(0.0);
-                // The stretch is stored for the smaller id as body 1: flip it otherwise.
-                let sign = if g.id[i] < g.id[j] { 1.0 } else { -1.0 };
                 let cn = model.damping_with(zeta, m_eff);
-                let mut c = contact_force(model, delta, vn, vt, cn, model.friction, sign * old, dt);
-                c.stretch *= sign;
-                (nrm, c, delta)
+                let c = contact_force(model, delta, vn, vt, cn, model.friction, stretch[k], dt);
+                Some((nrm, c, delta))
             })
             .collect();
         let wall_hits: Vec<Vec<WallHit>> = (0..n)
@@ -236,7 +255,13 @@ impl DemSystem {
         history.clear();
         let mut elastic = 0.0;
         let (kn, kt, mu_r) = (self.model.kn, self.model.kt, self.model.rolling_friction);
-        for (&(i, j), (nrm, c, delta)) in pairs.iter().zip(&results) {
+        let mut contacts = 0;
+        for (k, (&(i, j), hit)) in self.candidates.iter().zip(&results).enumerate() {
+            let Some((nrm, c, delta)) = hit else {
+                self.stretch[k] = 0.0;
+                continue;
+            };
+            contacts += 1;
             let (i, j) = (i as usize, j as usize);
             let f = [
                 c.fn_ * nrm[0] - c.ft * nrm[1],
@@ -259,11 +284,9 @@ impl DemSystem {
                 g.torque[i] += m;
                 g.torque[j] -= m;
             }
-            let key = (g.id[i].min(g.id[j]), g.id[i].max(g.id[j]));
-            history.insert(key, c.stretch);
+            self.stretch[k] = c.stretch;
             elastic += 0.5 * kn * delta * delta + 0.5 * kt * c.stretch * c.stretch;
         }
-        let mut contacts = pairs.len();
         for (i, hits) in wall_hits.into_iter().enumerate() {
             for (w, nrm, c, delta) in hits {
                 g.fx[i] += c.fn_ * nrm[0] - c.ft * nrm[1];
@@ -281,6 +304,51 @@ impl DemSystem {
         self.spare = std::mem::replace(&mut self.history, history);
         self.elastic = elastic;
         self.contacts = contacts;
+    }
+
+    /// Whether some grain moved more than half the skin since the list was built.
+    fn list_is_stale(&self) -> bool {
+        let g = &self.grains;
+        if self.built_at.0.len() != g.len() {
+            return true;
+        }
+        let half = 0.5 * self.skin;
+        (0..g.len()).into_par_iter().with_min_len(4096).any(|i| {
+            let (dx, dy) = (g.x[i] - self.built_at.0[i], g.y[i] - self.built_at.1[i]);
+            dx * dx + dy * dy > half * half
+        })
+    }
+
+    /// Rebuild the Verlet list (pairs within r_i + r_j + skin) and carry the tangential
+    /// stretch of every live contact over to it.
+    fn rebuild_list(&mut self) {
+        let g = &self.grains;
+        let rmax = g.r.iter().cloned().fold(0.0, f64::max);
+        // Skin: 30 % of the largest radius; rebuilt when any grain has moved half of it.
+        self.skin = 0.3 * rmax;
+        let live: HistoryMap = self
+            .candidates
+            .iter()
+            .zip(&self.stretch)
+            .filter(|(_, s)| **s != 0.0)
+            .map(|(&(i, j), &s)| oriented(g.id[i as usize], g.id[j as usize], s))
+            .collect();
+        let candidates = CellList::build(g, 2.0 * rmax + self.skin).pairs_within(g, self.skin);
+        self.stretch = candidates
+            .iter()
+            .map(|&(i, j)| {
+                let (key, sign) = oriented(g.id[i as usize], g.id[j as usize], 1.0);
+                sign * live.get(&key).copied().unwrap_or(0.0)
+            })
+            .collect();
+        self.candidates = candidates;
+        self.built_at = (g.x.clone(), g.y.clone());
+        self.rebuilds += 1;
+    }
+
+    /// Verlet-list rebuilds so far.
+    pub fn list_rebuilds(&self) -> u64 {
+        self.rebuilds
     }
 
     /// Contacts of grain `i` with the walls: (wall, normal from wall to grain, force, overlap).
@@ -325,4 +393,14 @@ fn rolling_torque(limit: f64, omega_rel: f64, inv_inertia_sum: f64, dt: f64) -> 
     }
     let stop = omega_rel.abs() / (inv_inertia_sum * dt);
     -limit.min(stop) * omega_rel.signum()
+}
+
+/// The history key of the pair (a, b) of grain ids, smaller id first, with `value`
+/// (a stretch for body a) re-expressed for the smaller id as body 1.
+fn oriented(a: u64, b: u64, value: f64) -> ((u64, u64), f64) {
+    if a < b {
+        ((a, b), value)
+    } else {
+        ((b, a), -value)
+    }
 }
