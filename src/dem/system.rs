@@ -36,6 +36,9 @@ const WALL_KEY: u64 = 1 << 63;
 /// One grain–wall contact: wall index, unit normal from the wall to the grain, force, overlap.
 type WallHit = (usize, [f64; 2], ContactForce, f64);
 
+/// One grain–grain contact: unit normal from i to j, force on j, overlap, rolling torque on i.
+type PairHit = ([f64; 2], ContactForce, f64, f64);
+
 /// Default fraction λ of the critical time step (seed eq. 5.60).
 pub const DEFAULT_LAMBDA: f64 = 0.1;
 
@@ -64,6 +67,10 @@ pub struct DemSystem {
     candidates: Vec<(u32, u32)>,
     /// Tangential stretch per candidate (0 when not in contact), for body i of (i, j).
     stretch: Vec<f64>,
+    /// Per grain, its candidates: `adj[adj_start[g]..adj_start[g + 1]]` holds k << 1 | role
+    /// (role 1: the grain is j of pair k), in increasing k.
+    adj_start: Vec<u32>,
+    adj: Vec<u32>,
     /// Positions when the list was built.
     built_at: (Vec<f64>, Vec<f64>),
     /// Verlet skin (m).
@@ -134,6 +141,8 @@ impl DemSystem {
             steps: 0,
             candidates: Vec::new(),
             stretch: Vec::new(),
+            adj_start: Vec::new(),
+            adj: Vec::new(),
             built_at: (Vec::new(), Vec::new()),
             skin: 0.0,
             rebuilds: 0,
@@ -206,7 +215,8 @@ impl DemSystem {
         let (model, dt) = (&self.model, self.dt);
         let stretch = &self.stretch;
         let zeta = model.damping_ratio();
-        let results: Vec<Option<([f64; 2], ContactForce, f64)>> = self
+        let mu_r = model.rolling_friction;
+        let results: Vec<Option<PairHit>> = self
             .candidates
             .par_iter()
             .enumerate()
@@ -237,7 +247,18 @@ impl DemSystem {
                 let m_eff = g.m[i] * g.m[j] / (g.m[i] + g.m[j]);
                 let cn = model.damping_with(zeta, m_eff);
                 let c = contact_force(model, delta, vn, vt, cn, model.friction, stretch[k], dt);
-                Some((nrm, c, delta))
+                let roll = if mu_r > 0.0 {
+                    let r_eff = g.r[i] * g.r[j] / (g.r[i] + g.r[j]);
+                    rolling_torque(
+                        mu_r * r_eff * c.fn_.abs(),
+                        g.omega[i] - g.omega[j],
+                        g.inv_inertia[i] + g.inv_inertia[j],
+                        dt,
+                    )
+                } else {
+                    0.0
+                };
+                Some((nrm, c, delta, roll))
             })
             .collect();
         let wall_hits: Vec<Vec<WallHit>> = (0..n)
@@ -245,48 +266,70 @@ impl DemSystem {
             .with_min_len(256)
             .map(|i| self.wall_contacts(i, zeta))
             .collect();
-        let g = &mut self.grains;
-        for i in 0..n {
-            g.fx[i] = g.m[i] * (self.gravity[0] - self.global_damping * g.vx[i]);
-            g.fy[i] = g.m[i] * (self.gravity[1] - self.global_damping * g.vy[i]);
-            g.torque[i] = 0.0;
+        // Per grain, in parallel: gravity and global damping, then its contacts in list
+        // order, so the sums do not depend on the thread count.
+        {
+            let Grains {
+                fx,
+                fy,
+                torque,
+                m,
+                vx,
+                vy,
+                r,
+                ..
+            } = &mut self.grains;
+            let (m, vx, vy, r) = (&*m, &*vx, &*vy, &*r);
+            let (adj_start, adj) = (&self.adj_start, &self.adj);
+            let (gravity, alpha) = (self.gravity, self.global_damping);
+            let results = &results;
+            fx.par_iter_mut()
+                .zip(fy.par_iter_mut())
+                .zip(torque.par_iter_mut())
+                .enumerate()
+                .with_min_len(1024)
+                .for_each(|(i, ((fxi, fyi), ti))| {
+                    let mut f = [
+                        m[i] * (gravity[0] - alpha * vx[i]),
+                        m[i] * (gravity[1] - alpha * vy[i]),
+                    ];
+                    let mut t = 0.0;
+                    for &e in &adj[adj_start[i] as usize..adj_start[i + 1] as usize] {
+                        let Some((nrm, c, _, roll)) = &results[(e >> 1) as usize] else {
+                            continue;
+                        };
+                        let pf = [
+                            c.fn_ * nrm[0] - c.ft * nrm[1],
+                            c.fn_ * nrm[1] + c.ft * nrm[0],
+                        ];
+                        // Body j (bit set) gets +F and −roll; body i the opposite. Friction
+                        // turns both the same way: −r F_t.
+                        let s = if e & 1 == 1 { 1.0 } else { -1.0 };
+                        f[0] += s * pf[0];
+                        f[1] += s * pf[1];
+                        t += -r[i] * c.ft - s * roll;
+                    }
+                    *fxi = f[0];
+                    *fyi = f[1];
+                    *ti = t;
+                });
         }
+        let (kn, kt) = (self.model.kn, self.model.kt);
+        let mut elastic = 0.0;
+        let mut contacts = 0;
+        for (k, hit) in results.iter().enumerate() {
+            match hit {
+                None => self.stretch[k] = 0.0,
+                Some((_, c, delta, _)) => {
+                    self.stretch[k] = c.stretch;
+                    elastic += 0.5 * kn * delta * delta + 0.5 * kt * c.stretch * c.stretch;
+                    contacts += 1;
+                }
+            }
+        }
+        let g = &mut self.grains;
         let mut history = std::mem::take(&mut self.spare);
         history.clear();
-        let mut elastic = 0.0;
-        let (kn, kt, mu_r) = (self.model.kn, self.model.kt, self.model.rolling_friction);
-        let mut contacts = 0;
-        for (k, (&(i, j), hit)) in self.candidates.iter().zip(&results).enumerate() {
-            let Some((nrm, c, delta)) = hit else {
-                self.stretch[k] = 0.0;
-                continue;
-            };
-            contacts += 1;
-            let (i, j) = (i as usize, j as usize);
-            let f = [
-                c.fn_ * nrm[0] - c.ft * nrm[1],
-                c.fn_ * nrm[1] + c.ft * nrm[0],
-            ];
-            g.fx[j] += f[0];
-            g.fy[j] += f[1];
-            g.fx[i] -= f[0];
-            g.fy[i] -= f[1];
-            g.torque[i] -= g.r[i] * c.ft;
-            g.torque[j] -= g.r[j] * c.ft;
-            if mu_r > 0.0 {
-                let r_eff = g.r[i] * g.r[j] / (g.r[i] + g.r[j]);
-                let m = rolling_torque(
-                    mu_r * r_eff * c.fn_.abs(),
-                    g.omega[i] - g.omega[j],
-                    g.inv_inertia[i] + g.inv_inertia[j],
-                    self.dt,
-                );
-                g.torque[i] += m;
-                g.torque[j] -= m;
-            }
-            self.stretch[k] = c.stretch;
-            elastic += 0.5 * kn * delta * delta + 0.5 * kt * c.stretch * c.stretch;
-        }
         for (i, hits) in wall_hits.into_iter().enumerate() {
             for (w, nrm, c, delta) in hits {
                 g.fx[i] += c.fn_ * nrm[0] - c.ft * nrm[1];
@@ -341,6 +384,25 @@ impl DemSystem {
                 sign * live.get(&key).copied().unwrap_or(0.0)
             })
             .collect();
+        let n = g.len();
+        let mut start = vec![0u32; n + 1];
+        for &(i, j) in &candidates {
+            start[i as usize + 1] += 1;
+            start[j as usize + 1] += 1;
+        }
+        for k in 0..n {
+            start[k + 1] += start[k];
+        }
+        let mut fill = start.clone();
+        let mut adj = vec![0u32; 2 * candidates.len()];
+        for (k, &(i, j)) in candidates.iter().enumerate() {
+            for (who, role) in [(i, 0u32), (j, 1u32)] {
+                adj[fill[who as usize] as usize] = (k as u32) << 1 | role;
+                fill[who as usize] += 1;
+            }
+        }
+        self.adj_start = start;
+        self.adj = adj;
         self.candidates = candidates;
         self.built_at = (g.x.clone(), g.y.clone());
         self.rebuilds += 1;
