@@ -166,11 +166,15 @@ impl DemSystem {
         let dt = self.dt;
         self.kick(0.5 * dt);
         let g = &mut self.grains;
-        for i in 0..g.len() {
-            g.x[i] += dt * g.vx[i];
-            g.y[i] += dt * g.vy[i];
-            g.theta[i] += dt * g.omega[i];
-        }
+        let drift = |p: &mut [f64], v: &[f64]| {
+            p.par_iter_mut()
+                .zip(v.par_iter())
+                .with_min_len(4096)
+                .for_each(|(p, v)| *p += dt * v)
+        };
+        drift(&mut g.x, &g.vx);
+        drift(&mut g.y, &g.vy);
+        drift(&mut g.theta, &g.omega);
         for w in &mut self.walls {
             w.advance(dt);
         }
@@ -182,11 +186,20 @@ impl DemSystem {
 
     fn kick(&mut self, h: f64) {
         let g = &mut self.grains;
-        for i in 0..g.len() {
-            g.vx[i] += h * g.fx[i] / g.m[i];
-            g.vy[i] += h * g.fy[i] / g.m[i];
-            g.omega[i] += h * g.torque[i] * g.inv_inertia[i];
-        }
+        // Element-wise, so parallel and still thread-count independent.
+        let linear = |v: &mut [f64], f: &[f64], m: &[f64]| {
+            v.par_iter_mut()
+                .zip(f.par_iter().zip(m.par_iter()))
+                .with_min_len(4096)
+                .for_each(|(v, (f, m))| *v += h * f / m)
+        };
+        linear(&mut g.vx, &g.fx, &g.m);
+        linear(&mut g.vy, &g.fy, &g.m);
+        g.omega
+            .par_iter_mut()
+            .zip(g.torque.par_iter().zip(g.inv_inertia.par_iter()))
+            .with_min_len(4096)
+            .for_each(|(w, (t, inv))| *w += h * t * inv);
     }
 
     /// Contacts active at the last force evaluation.
