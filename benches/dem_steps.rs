@@ -6,7 +6,7 @@
 //! density of a settled packing without the minutes of settling.
 //! `cargo bench --bench dem_steps` (GRAINFLOW_BENCH_STEPS, default 200).
 use grainflow::dem::sample::Rng;
-use grainflow::dem::{ContactModel, DemSystem, Grains, Wall};
+use grainflow::dem::{closed_box, ContactModel, DemSystem, Grains, Wall};
 use std::time::Instant;
 
 fn packing(n_side_x: usize, n_side_y: usize) -> (Grains, Vec<Wall>) {
@@ -25,19 +25,7 @@ fn packing(n_side_x: usize, n_side_y: usize) -> (Grains, Vec<Wall>) {
         (n_side_x as f64 + 2.0) * s,
         (n_side_y as f64 * 0.866 + 2.0) * s,
     );
-    let wall = |a, b| Wall {
-        a,
-        b,
-        velocity: [0.0, 0.0],
-        friction: 0.5,
-    };
-    let walls = vec![
-        wall([0.0, 0.0], [w, 0.0]),
-        wall([w, 0.0], [w, h]),
-        wall([w, h], [0.0, h]),
-        wall([0.0, h], [0.0, 0.0]),
-    ];
-    (g, walls)
+    (g, closed_box([0.0, 0.0], [w, h], 0.5))
 }
 
 fn run(nx: usize, ny: usize, threads: usize, steps: usize) -> (f64, f64, usize) {

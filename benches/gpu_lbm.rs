@@ -6,10 +6,11 @@
 //! GRAINFLOW_BENCH_STEPS steps (default 50).
 //! `cargo bench --bench gpu_lbm -- seed` — the seed study's speed-up table: 7.2 million
 //! nodes (3000 × 2400), 100 iterations, fluid only: 1 CPU thread, all CPU threads, GPU.
+mod common;
+use common::periodic_box;
 use decomposition::SingleProcess;
 use grainflow::gpu::{GpuContext, GpuFluid};
-use grainflow::lbm::lattice::{FaceCondition, LatticeSetup};
-use grainflow::lbm::{Collision, FluidBackend, Lattice, Real};
+use grainflow::lbm::{Collision, FluidBackend, Real};
 use grainflow::scene::GpuStorage;
 use std::sync::Arc;
 use std::time::Instant;
@@ -19,35 +20,6 @@ fn env(name: &str, default: usize) -> usize {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
-}
-
-/// A periodic box with a shear-wave initial condition.
-fn lattice<T: Real>(nx: usize, ny: usize, collision: Collision) -> Lattice<T> {
-    let setup = LatticeSetup {
-        nx,
-        ny,
-        cells: vec![0; nx * ny],
-        faces: [
-            FaceCondition::Periodic,
-            FaceCondition::Periodic,
-            FaceCondition::Periodic,
-            FaceCondition::Periodic,
-        ],
-        solids: vec![],
-        collision,
-        tau0: 0.6,
-        smagorinsky: None,
-        force: [0.0, 0.0],
-    };
-    let mut l = Lattice::<T>::new(setup);
-    for y in 0..ny {
-        let u = 0.05 * (std::f64::consts::TAU * y as f64 / ny as f64).sin();
-        for x in 0..nx {
-            l.set_equilibrium(x, y, 1.0, [u, 0.0]);
-        }
-    }
-    l.update_boundaries();
-    l
 }
 
 /// Device-to-device copy bandwidth (read + write bytes per second), best of 5.
@@ -105,7 +77,7 @@ fn gpu_mlups<T: Real>(
     storage: GpuStorage,
     bw: f64,
 ) {
-    let mut g = match GpuFluid::new(lattice::<T>(n, n, c), ctx.clone(), storage) {
+    let mut g = match GpuFluid::new(periodic_box::<T>(n, n, c), ctx.clone(), storage) {
         Ok(g) => g,
         Err(e) => {
             println!("  {} {} {storage:?}: skipped ({e})", c.name(), T::NAME);
@@ -149,12 +121,12 @@ fn seed_table(ctx: &Arc<GpuContext>) {
             .num_threads(t)
             .build()
             .unwrap();
-        let mut l = lattice::<f32>(nx, ny, Collision::Bgk);
+        let mut l = periodic_box::<f32>(nx, ny, Collision::Bgk);
         let s = pool.install(|| time_steps(&mut l, steps));
         rows.push((format!("CPU, {t} thread(s) (rayon)"), s * steps as f64));
     }
     let mut g = GpuFluid::new(
-        lattice::<f32>(nx, ny, Collision::Bgk),
+        periodic_box::<f32>(nx, ny, Collision::Bgk),
         ctx.clone(),
         GpuStorage::Native,
     )

@@ -1,7 +1,7 @@
 //! Preparing DEM samples: random sequential addition, settling, CSV loading.
 use grainflow::dem::{
-    load_csv, random_sequential_addition, settle, ContactModel, DemError, DemSystem,
-    SizeDistribution, Wall,
+    closed_box, load_csv, random_sequential_addition, settle, stable_time_step, ContactModel,
+    DemError, DemSystem, SizeDistribution,
 };
 
 const SIZES: SizeDistribution = SizeDistribution::Uniform {
@@ -64,17 +64,7 @@ fn size_distributions_respect_their_bounds() {
 fn settling_under_gravity_comes_to_rest() {
     let l = 0.02;
     let g = random_sequential_addition([0.0; 2], [l, l], SIZES, 2500.0, 0.35, 5, 2000);
-    let wall = |a, b| Wall {
-        a,
-        b,
-        velocity: [0.0, 0.0],
-        friction: 0.5,
-    };
-    let walls = vec![
-        wall([0.0, 0.0], [l, 0.0]),
-        wall([l, 0.0], [l, 2.0 * l]),
-        wall([0.0, 2.0 * l], [0.0, 0.0]),
-    ];
+    let walls = closed_box([0.0, 0.0], [l, 2.0 * l], 0.5);
     let model = ContactModel {
         kn: 1e5,
         kt: 0.5e5,
@@ -82,17 +72,7 @@ fn settling_under_gravity_comes_to_rest() {
         friction: 0.5,
         rolling_friction: 0.0,
     };
-    let probe = DemSystem::new(
-        g.clone(),
-        walls.clone(),
-        model,
-        [0.0, -9.81],
-        1e-9,
-        0.1,
-        false,
-    )
-    .unwrap();
-    let dt = probe.stable_time_step(0.1);
+    let dt = stable_time_step(&g, &model, 0.1);
     let mut s = DemSystem::new(g, walls, model, [0.0, -9.81], dt, 0.1, false).unwrap();
     let threshold = 1e-12;
     let steps = settle(&mut s, 50.0, threshold, 200_000);

@@ -1,7 +1,10 @@
 //! DEM validation against analytic solutions: binary collision (restitution and contact
 //! duration), a block and a disk on an incline (sticking, sliding, rolling), energy
 //! conservation over 10⁵ steps, thread-count determinism, and the input errors.
-use grainflow::dem::{ContactModel, DemError, DemSystem, Grains, Wall};
+use grainflow::dem::sample::Rng;
+use grainflow::dem::{
+    closed_box, stable_time_step, ContactModel, DemError, DemSystem, Grains, Wall,
+};
 use std::f64::consts::PI;
 
 const RHO: f64 = 2500.0;
@@ -31,8 +34,7 @@ fn binary_collision_restitution_and_duration() {
         let m = model(e, 0.0);
         // λ = 0.002: about 1500 steps per contact, so the dashpot's jump at the first and
         // last step of the contact (an O(Δt) error) stays well below 1 %.
-        let probe = DemSystem::new(g.clone(), vec![], m, [0.0, 0.0], 1e-9, 0.01, false).unwrap();
-        let dt = probe.stable_time_step(0.002);
+        let dt = stable_time_step(&g, &m, 0.002);
         let mut s = DemSystem::new(g, vec![], m, [0.0, 0.0], dt, 0.01, false).unwrap();
         let overlap = |s: &DemSystem| 2.0 * R - (s.grains.x[1] - s.grains.x[0]);
         let (mut start, mut end) = (None, None);
@@ -80,15 +82,8 @@ fn incline(angle_deg: f64, mu: f64, lock_rotation: bool) -> f64 {
     // Start at the equilibrium overlap m g cos θ / k_n, so nothing bounces.
     let y = R - mass * gmag * a.cos() / m.kn;
     g.push([0.0, y], R, RHO, lock_rotation);
-    let floor = Wall {
-        a: [-1.0, 0.0],
-        b: [10.0, 0.0],
-        velocity: [0.0, 0.0],
-        friction: mu,
-    };
-    let probe =
-        DemSystem::new(g.clone(), vec![floor.clone()], m, gravity, 1e-9, 0.1, false).unwrap();
-    let dt = probe.stable_time_step(0.1);
+    let floor = Wall::fixed([-1.0, 0.0], [10.0, 0.0], mu);
+    let dt = stable_time_step(&g, &m, 0.1);
     let mut s = DemSystem::new(g, vec![floor], m, gravity, dt, 0.1, false).unwrap();
     let steps = (0.2 / dt) as usize;
     for _ in 0..steps / 2 {
@@ -136,13 +131,8 @@ fn block_and_disk_on_an_incline() {
 /// 100 grains with random velocities in a closed box.
 fn gas() -> (Grains, Vec<Wall>) {
     let mut g = Grains::default();
-    let mut s = 7u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = Rng::new(7);
+    let mut rnd = || rng.uniform();
     let l = 0.04;
     for row in 0..10 {
         for col in 0..10 {
@@ -157,19 +147,7 @@ fn gas() -> (Grains, Vec<Wall>) {
             g.vy[i] = 0.2 * (rnd() - 0.5);
         }
     }
-    let wall = |a: [f64; 2], b: [f64; 2]| Wall {
-        a,
-        b,
-        velocity: [0.0, 0.0],
-        friction: 0.0,
-    };
-    let walls = vec![
-        wall([0.0, 0.0], [l, 0.0]),
-        wall([l, 0.0], [l, l]),
-        wall([l, l], [0.0, l]),
-        wall([0.0, l], [0.0, 0.0]),
-    ];
-    (g, walls)
+    (g, closed_box([0.0, 0.0], [l, l], 0.0))
 }
 
 /// A box of 100 colliding grains with gravity, no damping (e = 1) and no friction keeps
@@ -178,13 +156,11 @@ fn gas() -> (Grains, Vec<Wall>) {
 fn energy_is_conserved_without_damping_or_friction() {
     let (g, walls) = gas();
     let m = model(1.0, 0.0);
-    let probe =
-        DemSystem::new(g.clone(), walls.clone(), m, [0.0, -9.81], 1e-9, 0.1, false).unwrap();
     // λ = 0.025: about 45 steps per contact. The drift converges with λ (measured
     // max |E/E0 − 1|: 2.2e-2 at λ = 0.1, 1.2e-3 at 0.05, 7.6e-4 at 0.04, 4.2e-4 at 0.025, with
-    // the pair order before the Verlet list; 2.3e-4 at 0.025 now): the error comes from
+    // the first sample and pair order; 2.7e-4 at 0.025 now): the error comes from
     // contacts starting between steps.
-    let dt = probe.stable_time_step(0.025);
+    let dt = stable_time_step(&g, &m, 0.025);
     let mut s = DemSystem::new(g, walls, m, [0.0, -9.81], dt, 0.1, false).unwrap();
     let e0 = s.energy();
     let mut worst: f64 = 0.0;
@@ -214,9 +190,7 @@ fn results_do_not_depend_on_the_thread_count() {
         pool.install(|| {
             let (g, walls) = gas();
             let m = model(0.6, 0.5);
-            let probe = DemSystem::new(g.clone(), walls.clone(), m, [0.0, -9.81], 1e-9, 0.1, false)
-                .unwrap();
-            let dt = probe.stable_time_step(0.1);
+            let dt = stable_time_step(&g, &m, 0.1);
             let mut s = DemSystem::new(g, walls, m, [0.0, -9.81], dt, 0.1, false).unwrap();
             for _ in 0..5000 {
                 s.step();
@@ -251,9 +225,7 @@ fn results_do_not_depend_on_the_thread_count() {
 fn bad_time_step_and_overlaps_are_refused() {
     let (g, walls) = gas();
     let m = model(0.5, 0.5);
-    let probe =
-        DemSystem::new(g.clone(), walls.clone(), m, [0.0, -9.81], 1e-9, 0.1, false).unwrap();
-    let limit = probe.stable_time_step(0.1);
+    let limit = stable_time_step(&g, &m, 0.1);
     let e = DemSystem::new(
         g.clone(),
         walls.clone(),
@@ -297,16 +269,9 @@ fn rolling_friction_decelerates_a_rolling_disk() {
         let v0 = 0.5;
         g.vx[0] = v0;
         g.omega[0] = -v0 / R;
-        let floor = Wall {
-            a: [-1.0, 0.0],
-            b: [10.0, 0.0],
-            velocity: [0.0, 0.0],
-            friction: 0.5,
-        };
+        let floor = Wall::fixed([-1.0, 0.0], [10.0, 0.0], 0.5);
         let gravity = [0.0, -g0];
-        let probe =
-            DemSystem::new(g.clone(), vec![floor.clone()], m, gravity, 1e-9, 0.1, false).unwrap();
-        let dt = probe.stable_time_step(0.1);
+        let dt = stable_time_step(&g, &m, 0.1);
         let mut s = DemSystem::new(g, vec![floor], m, gravity, dt, 0.1, false).unwrap();
         while s.time < 0.05 {
             s.step();

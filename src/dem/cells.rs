@@ -7,8 +7,6 @@ use rayon::prelude::*;
 /// Grains binned into square cells at least as wide as the largest contact distance.
 #[derive(Debug, Clone, Default)]
 pub struct CellList {
-    size: f64,
-    origin: [f64; 2],
     nx: usize,
     ny: usize,
     /// Grains of cell c are `order[start[c]..start[c + 1]]`, in increasing index.
@@ -60,8 +58,6 @@ impl CellList {
             fill[c] += 1;
         }
         Self {
-            size,
-            origin: [x0, y0],
             nx,
             ny,
             start,
@@ -125,16 +121,6 @@ impl CellList {
             })
             .collect()
     }
-
-    /// Cell width (m).
-    pub fn size(&self) -> f64 {
-        self.size
-    }
-
-    /// Grid origin (m).
-    pub fn origin(&self) -> [f64; 2] {
-        self.origin
-    }
 }
 
 #[cfg(test)]
@@ -145,13 +131,8 @@ mod tests {
     #[test]
     fn matches_brute_force() {
         let mut g = Grains::default();
-        let mut s = 12345u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::dem::sample::Rng::new(12345);
+        let mut rnd = || rng.uniform();
         for _ in 0..600 {
             let (x, y, r) = (rnd(), rnd() * 0.5, 0.005 + 0.01 * rnd());
             g.push([x, y], r, 2500.0, false);

@@ -20,5 +20,5 @@ pub mod walls;
 pub use contact::{ContactModel, DemError};
 pub use grains::Grains;
 pub use sample::{load_csv, random_sequential_addition, settle, SizeDistribution};
-pub use system::DemSystem;
-pub use walls::Wall;
+pub use system::{stable_time_step, DemSystem};
+pub use walls::{closed_box, Wall};

@@ -39,8 +39,12 @@ type WallHit = (usize, [f64; 2], ContactForce, f64);
 /// One grain–grain contact: unit normal from i to j, force on j, overlap, rolling torque on i.
 type PairHit = ([f64; 2], ContactForce, f64, f64);
 
-/// Default fraction λ of the critical time step (seed eq. 5.60).
-pub const DEFAULT_LAMBDA: f64 = 0.1;
+/// The largest stable time step λ·Δt_cr for `grains` in contact under `model` (s): the
+/// critical step of seed eq. 5.59 for the lightest grain, times λ (eq. 5.60; around 0.1).
+pub fn stable_time_step(grains: &Grains, model: &ContactModel, lambda: f64) -> f64 {
+    let m_min = grains.m.iter().cloned().fold(f64::INFINITY, f64::min);
+    lambda * model.critical_time_step(m_min)
+}
 
 /// Grains, walls and the contact law of one rank, advanced by velocity Verlet.
 #[derive(Debug, Clone)]
@@ -81,6 +85,10 @@ pub struct DemSystem {
     history: HistoryMap,
     /// The previous step's map, kept for its allocation.
     spare: HistoryMap,
+    /// Per candidate: the contact, if touching (buffer reused every step).
+    pair_hits: Vec<Option<PairHit>>,
+    /// Per grain: its wall contacts (buffer reused every step).
+    wall_hits: Vec<Vec<WallHit>>,
     /// Elastic energy stored in the contacts at the last force evaluation (J/m).
     elastic: f64,
     /// Active contacts at the last force evaluation.
@@ -109,8 +117,7 @@ impl DemSystem {
                 why: "must be in (0, 1]",
             });
         }
-        let m_min = grains.m.iter().cloned().fold(f64::INFINITY, f64::min);
-        let limit = lambda * model.critical_time_step(m_min);
+        let limit = stable_time_step(&grains, &model, lambda);
         let stable = dt > 0.0 && dt <= limit;
         if !grains.is_empty() && !stable {
             return Err(DemError::TimeStepTooLarge { dt, limit, lambda });
@@ -148,6 +155,8 @@ impl DemSystem {
             rebuilds: 0,
             history: HistoryMap::default(),
             spare: HistoryMap::default(),
+            pair_hits: Vec::new(),
+            wall_hits: Vec::new(),
             elastic: 0.0,
             contacts: 0,
         };
@@ -157,8 +166,7 @@ impl DemSystem {
 
     /// The largest stable time step λ·Δt_cr for these grains and contacts.
     pub fn stable_time_step(&self, lambda: f64) -> f64 {
-        let m_min = self.grains.m.iter().cloned().fold(f64::INFINITY, f64::min);
-        lambda * self.model.critical_time_step(m_min)
+        stable_time_step(&self.grains, &self.model, lambda)
     }
 
     /// One velocity-Verlet step: half kick, drift, walls move, forces, half kick.
@@ -229,8 +237,8 @@ impl DemSystem {
         let stretch = &self.stretch;
         let zeta = model.damping_ratio();
         let mu_r = model.rolling_friction;
-        let results: Vec<Option<PairHit>> = self
-            .candidates
+        let mut results = std::mem::take(&mut self.pair_hits);
+        self.candidates
             .par_iter()
             .enumerate()
             .with_min_len(256)
@@ -273,12 +281,13 @@ impl DemSystem {
                 };
                 Some((nrm, c, delta, roll))
             })
-            .collect();
-        let wall_hits: Vec<Vec<WallHit>> = (0..n)
+            .collect_into_vec(&mut results);
+        let mut wall_hits = std::mem::take(&mut self.wall_hits);
+        (0..n)
             .into_par_iter()
             .with_min_len(256)
             .map(|i| self.wall_contacts(i, zeta))
-            .collect();
+            .collect_into_vec(&mut wall_hits);
         // Per grain, in parallel: gravity and global damping, then its contacts in list
         // order, so the sums do not depend on the thread count.
         {
@@ -343,8 +352,8 @@ impl DemSystem {
         let g = &mut self.grains;
         let mut history = std::mem::take(&mut self.spare);
         history.clear();
-        for (i, hits) in wall_hits.into_iter().enumerate() {
-            for (w, nrm, c, delta) in hits {
+        for (i, hits) in wall_hits.iter().enumerate() {
+            for &(w, nrm, c, delta) in hits {
                 g.fx[i] += c.fn_ * nrm[0] - c.ft * nrm[1];
                 g.fy[i] += c.fn_ * nrm[1] + c.ft * nrm[0];
                 g.torque[i] -= g.r[i] * c.ft;
@@ -358,6 +367,9 @@ impl DemSystem {
             }
         }
         self.spare = std::mem::replace(&mut self.history, history);
+        // Keep the buffers for the next step (no allocation in the time loop).
+        self.pair_hits = results;
+        self.wall_hits = wall_hits;
         self.elastic = elastic;
         self.contacts = contacts;
     }

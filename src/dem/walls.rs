@@ -15,6 +15,16 @@ pub struct Wall {
 }
 
 impl Wall {
+    /// A fixed wall from `a` to `b` (m) with friction coefficient `friction`.
+    pub fn fixed(a: [f64; 2], b: [f64; 2], friction: f64) -> Self {
+        Wall {
+            a,
+            b,
+            velocity: [0.0, 0.0],
+            friction,
+        }
+    }
+
     /// Closest point of the segment to `p`.
     pub fn closest_point(&self, p: [f64; 2]) -> [f64; 2] {
         let d = [self.b[0] - self.a[0], self.b[1] - self.a[1]];
@@ -34,4 +44,12 @@ impl Wall {
             p[1] += self.velocity[1] * dt;
         }
     }
+}
+
+/// The four fixed walls of the box `[lo, hi]` (m): floor, right, lid, left.
+pub fn closed_box(lo: [f64; 2], hi: [f64; 2], friction: f64) -> Vec<Wall> {
+    let corners = [lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]];
+    (0..4)
+        .map(|k| Wall::fixed(corners[k], corners[(k + 1) % 4], friction))
+        .collect()
 }
