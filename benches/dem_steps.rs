@@ -49,12 +49,12 @@ fn run(nx: usize, ny: usize, threads: usize, steps: usize) -> (f64, f64, usize) 
             s.step();
         }
         let t = Instant::now();
-        let mut contacts = 0;
         for _ in 0..steps {
             s.step();
-            contacts += s.contacts();
         }
         let secs = t.elapsed().as_secs_f64();
+        // The packing barely moves: contacts per step are those of the last step.
+        let contacts = s.contacts() * steps;
         (
             (n * steps) as f64 / secs,
             contacts as f64 / secs,
@@ -63,7 +63,49 @@ fn run(nx: usize, ny: usize, threads: usize, steps: usize) -> (f64, f64, usize) 
     })
 }
 
+/// Write the 50 000-grain packing and its walls as a LAMMPS data file (atom_style sphere,
+/// 2-D), for the side-by-side run of `scripts/dem-vs-lammps`.
+fn write_lammps_data(path: &str) {
+    use std::fmt::Write;
+    let (g, walls) = packing(250, 200);
+    let (mut xhi, mut yhi) = (0.0f64, 0.0f64);
+    for w in &walls {
+        xhi = xhi.max(w.a[0]).max(w.b[0]);
+        yhi = yhi.max(w.a[1]).max(w.b[1]);
+    }
+    let mut s = String::new();
+    writeln!(s, "grainflow dem_steps packing: {} disks\n", g.len()).unwrap();
+    writeln!(s, "{} atoms\n1 atom types\n", g.len()).unwrap();
+    writeln!(
+        s,
+        "0 {xhi} xlo xhi\n0 {yhi} ylo yhi\n-0.001 0.001 zlo zhi\n"
+    )
+    .unwrap();
+    writeln!(s, "Atoms # sphere\n").unwrap();
+    for i in 0..g.len() {
+        // id type diameter density x y z; LAMMPS takes 2-D disk density as mass/area.
+        writeln!(
+            s,
+            "{} 1 {:.9e} 2500 {:.9e} {:.9e} 0",
+            i + 1,
+            2.0 * g.r[i],
+            g.x[i],
+            g.y[i]
+        )
+        .unwrap();
+    }
+    std::fs::write(path, s).unwrap();
+    println!(
+        "wrote {path}: {} grains, box {xhi:.6} x {yhi:.6} m",
+        g.len()
+    );
+}
+
 fn main() {
+    if let Some(path) = std::env::args().skip_while(|a| a != "--lammps-data").nth(1) {
+        write_lammps_data(&path);
+        return;
+    }
     let steps: usize = std::env::var("GRAINFLOW_BENCH_STEPS")
         .ok()
         .and_then(|v| v.parse().ok())

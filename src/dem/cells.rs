@@ -69,6 +69,30 @@ impl CellList {
         &self.order[self.start[c] as usize..self.start[c + 1] as usize]
     }
 
+    /// The grains below `owned` in cell order (row-major cells, increasing index within a
+    /// cell): a permutation that puts grains near each other close in memory.
+    pub fn owned_order(&self, owned: usize) -> Vec<u32> {
+        self.order
+            .iter()
+            .copied()
+            .filter(|&i| (i as usize) < owned)
+            .collect()
+    }
+
+    /// Follow a reordering of the grains: new grain k is old grain `order[k]` for
+    /// k < `order.len()`; later grains keep their index.
+    pub fn renumber(&mut self, order: &[u32]) {
+        let mut new_of = vec![0u32; order.len()];
+        for (k, &o) in order.iter().enumerate() {
+            new_of[o as usize] = k as u32;
+        }
+        for i in &mut self.order {
+            if (*i as usize) < order.len() {
+                *i = new_of[*i as usize];
+            }
+        }
+    }
+
     /// Every touching pair (i < j, overlap > 0), in cell order.
     pub fn touching_pairs(&self, g: &Grains) -> Vec<(u32, u32)> {
         self.pairs_within(g, 0.0)

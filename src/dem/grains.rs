@@ -27,7 +27,9 @@ pub struct Grains {
     pub fy: Vec<f64>,
     /// Torque of the last evaluation (N).
     pub torque: Vec<f64>,
-    /// Stable identity (survives reordering and, later, migration between ranks).
+    /// Stable identity, unique over all ranks (survives reordering and migration). Contact
+    /// pairs are oriented and forces summed by id, which makes results independent of the
+    /// storage order, the thread count and the rank count.
     pub id: Vec<u64>,
 }
 
@@ -81,6 +83,99 @@ impl Grains {
                 0.5 * self.m[i] * (self.vx[i] * self.vx[i] + self.vy[i] * self.vy[i]) + rot
             })
             .sum()
+    }
+
+    /// Reorder the first `order.len()` grains so that new grain k is old grain `order[k]`;
+    /// the rest keep their places. Precondition: `order` is a permutation of
+    /// `0..order.len()`.
+    pub fn permute_prefix(&mut self, order: &[u32]) {
+        fn apply<T: Copy>(v: &mut [T], order: &[u32], tmp: &mut Vec<T>) {
+            tmp.clear();
+            tmp.extend(order.iter().map(|&o| v[o as usize]));
+            v[..order.len()].copy_from_slice(tmp);
+        }
+        let mut t = Vec::with_capacity(order.len());
+        for v in self.reals_mut() {
+            apply(v, order, &mut t);
+        }
+        apply(&mut self.id, order, &mut Vec::with_capacity(order.len()));
+    }
+
+    /// Keep the first `n` grains.
+    pub fn truncate(&mut self, n: usize) {
+        for v in self.reals_mut() {
+            v.truncate(n);
+        }
+        self.id.truncate(n);
+    }
+
+    /// Keep grain i where `keep[i]`, in order (`keep` covers every grain).
+    pub fn retain(&mut self, keep: &[bool]) {
+        for v in self.reals_mut() {
+            let mut k = keep.iter();
+            v.retain(|_| *k.next().unwrap_or(&true));
+        }
+        let mut k = keep.iter();
+        self.id.retain(|_| *k.next().unwrap_or(&true));
+    }
+
+    /// Values per grain in [`Grains::pack`].
+    pub const PACKED: usize = 10;
+
+    /// Append grain `i`'s state (everything but the forces, which are recomputed after a
+    /// move) to `out` as [`Grains::PACKED`] values; the id travels as its bit pattern.
+    pub fn pack(&self, i: usize, out: &mut Vec<f64>) {
+        out.extend_from_slice(&[
+            self.x[i],
+            self.y[i],
+            self.vx[i],
+            self.vy[i],
+            self.theta[i],
+            self.omega[i],
+            self.r[i],
+            self.m[i],
+            self.inv_inertia[i],
+            f64::from_bits(self.id[i]),
+        ]);
+    }
+
+    /// Append a grain packed by [`Grains::pack`], forces zero.
+    pub fn push_packed(&mut self, p: &[f64]) {
+        let reals = [
+            &mut self.x,
+            &mut self.y,
+            &mut self.vx,
+            &mut self.vy,
+            &mut self.theta,
+            &mut self.omega,
+            &mut self.r,
+            &mut self.m,
+            &mut self.inv_inertia,
+        ];
+        for (v, &value) in reals.into_iter().zip(p) {
+            v.push(value);
+        }
+        self.fx.push(0.0);
+        self.fy.push(0.0);
+        self.torque.push(0.0);
+        self.id.push(p[9].to_bits());
+    }
+
+    fn reals_mut(&mut self) -> [&mut Vec<f64>; 12] {
+        [
+            &mut self.x,
+            &mut self.y,
+            &mut self.vx,
+            &mut self.vy,
+            &mut self.theta,
+            &mut self.omega,
+            &mut self.r,
+            &mut self.m,
+            &mut self.inv_inertia,
+            &mut self.fx,
+            &mut self.fy,
+            &mut self.torque,
+        ]
     }
 
     /// Total momentum (kg m/s per m).

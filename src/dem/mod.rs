@@ -12,7 +12,9 @@
 
 pub mod cells;
 pub mod contact;
+mod forces;
 pub mod grains;
+mod neighbours;
 pub mod sample;
 pub mod system;
 pub mod walls;
