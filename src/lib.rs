@@ -15,5 +15,6 @@ pub mod io;
 pub mod lbm;
 pub mod progress;
 pub mod run;
+pub mod run_grains;
 pub mod scene;
 pub mod simulation;

@@ -72,8 +72,17 @@ fn real_main() -> Result<i32> {
             Ok(0)
         }
         Command::Check { scene } => {
-            let s = scene::load(&scene)?;
-            print_check(&s);
+            match scene::load_any(&scene)? {
+                scene::AnyScene::Fluid(s) => print_check(&s),
+                scene::AnyScene::Grains(g) => {
+                    println!("{}: valid grains scene", g.path.display());
+                    println!("  title: {}", g.scene.title);
+                    println!("  walls: {}", g.scene.grains.walls.len());
+                    for w in &g.warnings {
+                        println!("  warning: {w}");
+                    }
+                }
+            }
             Ok(0)
         }
         Command::Run {
@@ -95,27 +104,23 @@ fn real_main() -> Result<i32> {
                     .build_global()
                     .context("setting up the thread pool")?;
             }
-            let s = scene::load(&scene)?;
+            let out = out.unwrap_or_else(|| default_out(&scene));
+            let s = match scene::load_any(&scene)? {
+                scene::AnyScene::Fluid(s) => *s,
+                scene::AnyScene::Grains(g) => {
+                    if restart.is_some() || precision.is_some() || backend.is_some() {
+                        anyhow::bail!(
+                            "--restart, --precision and --backend apply to fluid scenes; \
+                             {} is a grains scene (DEM in f64 on the CPU)",
+                            scene.display()
+                        );
+                    }
+                    return run_grain_scene(&g, out, !quiet, comm);
+                }
+            };
             for w in &s.warnings {
                 eprintln!("warning: {w}");
             }
-            let out = out.unwrap_or_else(|| {
-                let stem = scene
-                    .file_stem()
-                    .and_then(|x| x.to_str())
-                    .unwrap_or("scene");
-                let parent = scene
-                    .parent()
-                    .and_then(|p| p.file_name())
-                    .and_then(|x| x.to_str())
-                    .unwrap_or("");
-                let name = if stem == "scene" && !parent.is_empty() {
-                    parent
-                } else {
-                    stem
-                };
-                std::path::PathBuf::from("runs").join(name)
-            });
             let opts = RunOptions {
                 out_dir: out.clone(),
                 precision: precision.map(|p| match p {
@@ -192,6 +197,95 @@ fn real_main() -> Result<i32> {
             Ok(exit_code(summary.status))
         }
     }
+}
+
+/// The default output folder of a scene: `runs/<stem>` (`runs/<folder>` for `scene.toml`).
+fn default_out(scene: &std::path::Path) -> std::path::PathBuf {
+    let stem = scene
+        .file_stem()
+        .and_then(|x| x.to_str())
+        .unwrap_or("scene");
+    let parent = scene
+        .parent()
+        .and_then(|p| p.file_name())
+        .and_then(|x| x.to_str())
+        .unwrap_or("");
+    let name = if stem == "scene" && !parent.is_empty() {
+        parent
+    } else {
+        stem
+    };
+    std::path::PathBuf::from("runs").join(name)
+}
+
+/// Run a grains scene and report like a fluid run.
+fn run_grain_scene(
+    g: &scene::ValidGrainScene,
+    out: std::path::PathBuf,
+    progress: bool,
+    comm: &dyn decomposition::Comm,
+) -> Result<i32> {
+    for w in &g.warnings {
+        if comm.is_root() {
+            eprintln!("warning: {w}");
+        }
+    }
+    let opts = RunOptions {
+        out_dir: out.clone(),
+        precision: None,
+        backend: None,
+        gpu_storage: None,
+        steps: None,
+        progress,
+        restart: None,
+    };
+    if comm.is_root() {
+        eprintln!(
+            "running grains scene {} on {} rank(s) × {} threads",
+            g.path.display(),
+            comm.size(),
+            rayon::current_num_threads()
+        );
+    }
+    let summary = grainflow::run_grains::run_grains(g, &opts, comm)?;
+    if !comm.is_root() {
+        return Ok(exit_code(summary.status));
+    }
+    println!(
+        "{} grains, {} steps (Δt = {:.3e} s, settling {} steps) in {:.2} s: {:.2} M grain-steps/s, {} migrated",
+        summary.grains,
+        summary.steps,
+        summary.time_step_s,
+        summary.settle_steps,
+        summary.wall_time_s,
+        summary.grain_steps_per_s / 1e6,
+        summary.migrated
+    );
+    for (k, v) in &summary.results {
+        println!("  {k} = {v:.6e}");
+    }
+    for c in &summary.checks {
+        println!(
+            "  check {}: {} = {} -> {}",
+            if c.passed { "PASS" } else { "FAIL" },
+            c.quantity,
+            c.value
+                .map(|v| format!("{v:.6e}"))
+                .unwrap_or_else(|| "missing".into()),
+            describe_bounds(c)
+        );
+    }
+    println!(
+        "output: {}  (summary.json, grains.h5 + grains.xdmf, pictures/)",
+        out.display()
+    );
+    if let Some(e) = &summary.error {
+        eprintln!("error: {e}");
+    }
+    if summary.status == Status::ChecksFailed {
+        eprintln!("error: at least one check failed");
+    }
+    Ok(exit_code(summary.status))
 }
 
 /// Exit status: 0 ok, 2 a check failed, 3 unstable, 4 stopped by SIGTERM (checkpoint written).

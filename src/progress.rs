@@ -12,6 +12,8 @@ pub struct Progress {
     dt: f64,
     bar: Option<ProgressBar>,
     log: bool,
+    /// Label of the rate: "MLUPS" (cells = lattice cells) or "M grain-steps/s".
+    unit: &'static str,
     start: Instant,
     last_log: Instant,
 }
@@ -38,9 +40,16 @@ impl Progress {
             dt,
             bar,
             log: enabled && !tty,
+            unit: "MLUPS",
             start: now,
             last_log: now,
         }
+    }
+
+    /// Label the rate `unit` (e.g. "M grain-steps/s" when `cells` counts grains).
+    pub fn with_unit(mut self, unit: &'static str) -> Self {
+        self.unit = unit;
+        self
     }
 
     /// Report that `step` steps are done.
@@ -50,9 +59,10 @@ impl Progress {
             if step % 16 == 0 || step == self.total {
                 b.set_position(step);
                 b.set_message(format!(
-                    "t = {:.4e} s  {:.1} MLUPS",
+                    "t = {:.4e} s  {:.1} {}",
                     step as f64 * self.dt,
-                    self.mlups(step)
+                    self.mlups(step),
+                    self.unit
                 ));
             }
         } else if self.log && (step % every == 0 || self.last_log.elapsed().as_secs() >= 30) {
@@ -60,11 +70,12 @@ impl Progress {
             let el = self.start.elapsed().as_secs_f64();
             let eta = el / step as f64 * (self.total - step) as f64;
             eprintln!(
-                "step {step}/{} ({:.0}%)  t = {:.4e} s  {:.1} MLUPS  elapsed {el:.1} s  ETA {eta:.1} s",
+                "step {step}/{} ({:.0}%)  t = {:.4e} s  {:.1} {}  elapsed {el:.1} s  ETA {eta:.1} s",
                 self.total,
                 100.0 * step as f64 / self.total as f64,
                 step as f64 * self.dt,
-                self.mlups(step)
+                self.mlups(step),
+                self.unit
             );
         }
     }

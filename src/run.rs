@@ -57,6 +57,9 @@ pub enum RunError {
     /// The GPU backend could not start.
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),
+    /// The grains could not be set up.
+    #[error(transparent)]
+    Dem(#[from] crate::dem::DemError),
 }
 
 /// How a run ended.

@@ -4,6 +4,7 @@
 //! `<probe>.strouhal`, …). [`checks::evaluate`] compares them with the scene's checks.
 
 pub mod checks;
+pub mod collapse;
 pub mod flows;
 mod signals;
 

@@ -180,8 +180,13 @@ impl Grains {
 
     /// Total momentum (kg m/s per m).
     pub fn momentum(&self) -> [f64; 2] {
+        self.momentum_of(self.len())
+    }
+
+    /// Momentum of the first `n` grains (kg m/s per m).
+    pub fn momentum_of(&self, n: usize) -> [f64; 2] {
         let mut p = [0.0; 2];
-        for i in 0..self.len() {
+        for i in 0..n {
             p[0] += self.m[i] * self.vx[i];
             p[1] += self.m[i] * self.vy[i];
         }

@@ -15,12 +15,14 @@ pub mod contact;
 mod forces;
 pub mod grains;
 mod neighbours;
+pub mod parallel;
 pub mod sample;
 pub mod system;
 pub mod walls;
 
 pub use contact::{ContactModel, DemError};
 pub use grains::Grains;
+pub use parallel::SlabDem;
 pub use sample::{load_csv, random_sequential_addition, settle, SizeDistribution};
 pub use system::{stable_time_step, DemSystem};
 pub use walls::{closed_box, Wall};

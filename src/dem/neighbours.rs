@@ -59,11 +59,13 @@ impl DemSystem {
     /// stretch of each pair from `live` (see [`DemSystem::pair_history`]: take it before
     /// grains are added, removed or reordered). Owned grains are first reordered by cell
     /// when `spatial_sort`.
-    pub(crate) fn rebuild_from(&mut self, live: &HistoryMap, skin: f64, rmax: f64) {
+    /// Returns the reordering applied (new grain k is old grain `order[k]`), empty if none.
+    pub(crate) fn rebuild_from(&mut self, live: &HistoryMap, skin: f64, rmax: f64) -> Vec<u32> {
         self.skin = skin;
         let mut cells = CellList::build(&self.grains, 2.0 * rmax + skin);
+        let mut order = Vec::new();
         if self.spatial_sort && self.owned > 1 {
-            let order = cells.owned_order(self.owned);
+            order = cells.owned_order(self.owned);
             self.grains.permute_prefix(&order);
             cells.renumber(&order);
         }
@@ -137,6 +139,7 @@ impl DemSystem {
             .with_min_len(1024)
             .map(|i| {
                 (0..walls.len() as u32)
+                    .filter(|&w| !walls[w as usize].removed)
                     .filter(|&w| {
                         let c = walls[w as usize].closest_point([g.x[i], g.y[i]]);
                         let reach = g.r[i] + skin;
@@ -156,5 +159,6 @@ impl DemSystem {
         self.built_at = (g.x[..owned].to_vec(), g.y[..owned].to_vec());
         self.pair_results.clear();
         self.rebuilds += 1;
+        order
     }
 }

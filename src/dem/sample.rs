@@ -44,6 +44,62 @@ pub enum SizeDistribution {
 }
 
 impl SizeDistribution {
+    /// Every radius positive and finite, min ≤ max, mean inside the bounds, fraction in
+    /// [0, 1], std ≥ 0.
+    pub fn validate(&self) -> Result<(), DemError> {
+        let bad = |name, value, why| Err(DemError::Parameter { name, value, why });
+        let radius = |name, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                bad(name, v, "a radius must be positive and finite")
+            }
+        };
+        match *self {
+            SizeDistribution::Mono { r } => radius("radius_m", r),
+            SizeDistribution::Bidisperse {
+                small,
+                large,
+                fraction_small,
+            } => {
+                radius("small_radius_m", small)?;
+                radius("large_radius_m", large)?;
+                if !(0.0..=1.0).contains(&fraction_small) {
+                    return bad("fraction_small", fraction_small, "must be in [0, 1]");
+                }
+                Ok(())
+            }
+            SizeDistribution::Uniform { min, max } => {
+                radius("min_radius_m", min)?;
+                radius("max_radius_m", max)?;
+                if min > max {
+                    return bad("min_radius_m", min, "must not exceed max_radius_m");
+                }
+                Ok(())
+            }
+            SizeDistribution::Normal {
+                mean,
+                std,
+                min,
+                max,
+            } => {
+                radius("min_radius_m", min)?;
+                radius("max_radius_m", max)?;
+                if !(min <= mean && mean <= max) {
+                    return bad(
+                        "mean_radius_m",
+                        mean,
+                        "must lie in [min_radius_m, max_radius_m]",
+                    );
+                }
+                if !(std >= 0.0 && std.is_finite()) {
+                    return bad("std_radius_m", std, "must be ≥ 0");
+                }
+                Ok(())
+            }
+        }
+    }
+
     /// The largest radius it can draw.
     pub fn max_radius(&self) -> f64 {
         match *self {

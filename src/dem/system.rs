@@ -311,6 +311,13 @@ impl DemSystem {
         self.rebuilds
     }
 
+    /// Remove wall `w` (it keeps its index): from the next list rebuild on, which this
+    /// forces, it touches nothing.
+    pub fn remove_wall(&mut self, w: usize) {
+        self.walls[w].removed = true;
+        self.walls_built_at.clear();
+    }
+
     /// Index of the owned grain with this id, if this system owns it (O(N)).
     pub fn index_of(&self, id: u64) -> Option<usize> {
         self.grains.id[..self.owned].iter().position(|&x| x == id)

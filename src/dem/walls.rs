@@ -12,6 +12,9 @@ pub struct Wall {
     pub velocity: [f64; 2],
     /// Friction coefficient grain–wall.
     pub friction: f64,
+    /// Removed from the run (e.g. a lifted gate): no longer touches grains. Removal keeps
+    /// the wall's index, which keys its contact history.
+    pub removed: bool,
 }
 
 impl Wall {
@@ -22,6 +25,7 @@ impl Wall {
             b,
             velocity: [0.0, 0.0],
             friction,
+            removed: false,
         }
     }
 

@@ -38,7 +38,7 @@ impl Context<'_> {
     }
 
     /// An `Invalid` error for the `nth` occurrence of `key`.
-    fn err(&self, key: &str, nth: usize, message: impl Into<String>) -> SceneError {
+    pub(crate) fn err(&self, key: &str, nth: usize, message: impl Into<String>) -> SceneError {
         SceneError::Invalid {
             path: self.path.to_owned(),
             line: self.line_of(key, nth),
@@ -48,7 +48,7 @@ impl Context<'_> {
     }
 }
 
-fn positive(ctx: &Context, key: &str, v: f64, what: &str) -> Result<(), SceneError> {
+pub(crate) fn positive(ctx: &Context, key: &str, v: f64, what: &str) -> Result<(), SceneError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
@@ -469,7 +469,12 @@ fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(), SceneErr
             _ => {}
         }
     }
-    for (n, c) in s.checks.iter().enumerate() {
+    validate_checks(&s.checks, ctx)
+}
+
+/// Each check gives expected with one tolerance, or max and/or min.
+pub(crate) fn validate_checks(checks: &[Check], ctx: &Context) -> Result<(), SceneError> {
+    for (n, c) in checks.iter().enumerate() {
         let forms = [c.expected.is_some(), c.max.is_some() || c.min.is_some()];
         let tol = c.tolerance.is_some() as u8 + c.relative_tolerance.is_some() as u8;
         let ok = match forms {

@@ -1,0 +1,461 @@
+//! Running a grains-only scene: prepare the sample (pack, settle, trim, or load), then the
+//! time loop of named, timed stages — walls (removals), DEM step (with migration and
+//! ghost exchange inside), output — and the analyses, checks and `summary.json`.
+
+use crate::analysis::checks::{evaluate, CheckOutcome};
+use crate::analysis::collapse::pile_shape;
+use crate::analysis::Results;
+use crate::dem::parallel::balanced_bounds;
+use crate::dem::sample::{load_csv, random_sequential_addition};
+use crate::dem::{stable_time_step, DemError, DemSystem, Grains, SlabDem};
+use crate::io::atomic::{ensure_writable_dir, write_atomic};
+use crate::io::grains_out::{write_grains_png, GrainWriter};
+use crate::progress::Progress;
+use crate::run::{RunError, RunOptions, StageStats, Status};
+use crate::scene::{
+    size_distribution, GrainAnalysis, GrainScene, SampleSpec, TimeStepSpec, ValidGrainScene,
+};
+use decomposition::Comm;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Stages of a grains step, in order.
+pub const GRAIN_STAGES: [&str; 3] = ["walls", "dem", "output"];
+
+/// Everything a grains run's `summary.json` holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct GrainSummary {
+    /// grainflow version.
+    pub version: &'static str,
+    /// Scene file.
+    pub scene_path: std::path::PathBuf,
+    /// Scene title.
+    pub title: String,
+    /// The scene as parsed.
+    pub scene: GrainScene,
+    /// Outcome.
+    pub status: Status,
+    /// What went wrong, if anything.
+    pub error: Option<String>,
+    /// Validation warnings.
+    pub warnings: Vec<String>,
+    /// MPI ranks.
+    pub ranks: usize,
+    /// Rayon threads per rank.
+    pub threads: usize,
+    /// x-boundaries of the ranks' slabs (m).
+    pub slab_bounds_m: Vec<f64>,
+    /// Grains in the run.
+    pub grains: usize,
+    /// Time step (s) and the λ it satisfies.
+    pub time_step_s: f64,
+    /// See `time_step_s`.
+    pub lambda: f64,
+    /// Steps spent settling the sample (0 when it was not settled).
+    pub settle_steps: u64,
+    /// Steps of the run.
+    pub steps: u64,
+    /// Simulated time (s).
+    pub simulated_time_s: f64,
+    /// Wall time of the time loop (s).
+    pub wall_time_s: f64,
+    /// Grain-steps per second over the loop (all ranks).
+    pub grain_steps_per_s: f64,
+    /// Seconds per stage, slowest rank.
+    pub stage_seconds: BTreeMap<&'static str, f64>,
+    /// Seconds per stage over ranks.
+    pub stages: BTreeMap<&'static str, StageStats>,
+    /// Grains handed to another rank, all ranks together.
+    pub migrated: u64,
+    /// Seconds waiting for ghost and migration messages, slowest rank.
+    pub comm_wait_s: f64,
+    /// Contacts at the end.
+    pub contacts: usize,
+    /// Verlet-list rebuilds.
+    pub list_rebuilds: u64,
+    /// Kinetic energy at the end (J/m).
+    pub kinetic_energy_j_m: f64,
+    /// Total momentum at the end (kg m/s per m).
+    pub momentum: [f64; 2],
+    /// Snapshots written.
+    pub snapshots: usize,
+    /// Results of the analyses.
+    pub results: Results,
+    /// Checks with their outcome.
+    pub checks: Vec<CheckOutcome>,
+}
+
+/// Every rank's owned grains, gathered on every rank and sorted by id (collective).
+pub fn gather_grains(sys: &DemSystem, comm: &dyn Comm) -> Grains {
+    let mut local = Vec::with_capacity(sys.owned() * Grains::PACKED);
+    for i in 0..sys.owned() {
+        sys.grains.pack(i, &mut local);
+    }
+    let all = comm.all_gather_f64(&local);
+    let mut rows: Vec<&[f64]> = all.chunks_exact(Grains::PACKED).collect();
+    rows.sort_by_key(|p| p[9].to_bits());
+    let mut g = Grains::default();
+    for p in rows {
+        g.push_packed(p);
+    }
+    g
+}
+
+/// Global sums of kinetic energy, momentum and grain count (collective).
+fn global_state(d: &SlabDem, comm: &dyn Comm) -> (f64, [f64; 2], f64) {
+    let p = d.system.grains.momentum_of(d.system.owned());
+    let mut v = [
+        d.system.owned_kinetic_energy(),
+        p[0],
+        p[1],
+        d.system.owned() as f64,
+    ];
+    comm.sum_f64(&mut v);
+    (v[0], [v[1], v[2]], v[3])
+}
+
+/// Prepare the sample of `scene` (identical on every rank; settling runs distributed).
+/// Returns the grains (ids 0..N) and the settling steps.
+fn prepare(
+    scene: &ValidGrainScene,
+    dt_of: &dyn Fn(&Grains) -> f64,
+    comm: &dyn Comm,
+) -> Result<(Grains, u64), RunError> {
+    let s = &scene.scene;
+    let rho = s.grains.density_kg_m3;
+    let (grains, settle) = match &s.grains.sample {
+        SampleSpec::Csv { file } => (load_csv(&scene.base_dir.join(file), rho)?, None),
+        SampleSpec::Pack {
+            min_m,
+            max_m,
+            sizes,
+            solid_fraction,
+            seed,
+            settle,
+        } => (
+            random_sequential_addition(
+                *min_m,
+                *max_m,
+                size_distribution(sizes),
+                rho,
+                *solid_fraction,
+                *seed,
+                20_000,
+            ),
+            settle.clone(),
+        ),
+    };
+    if grains.is_empty() {
+        return Err(DemError::Parameter {
+            name: "sample",
+            value: 0.0,
+            why: "the sample holds no grains: enlarge the packing rectangle or check the CSV",
+        }
+        .into());
+    }
+    let Some(st) = settle else {
+        return Ok((grains, 0));
+    };
+    let mut d = start(scene, grains, dt_of, true, comm)?;
+    d.system.global_damping = st.damping_1_s;
+    let mut steps = 0;
+    let n = d.global_count(comm) as f64;
+    loop {
+        for _ in 0..100 {
+            d.step(comm);
+        }
+        steps += 100;
+        let (ke, _, _) = global_state(&d, comm);
+        if ke / n < st.kinetic_energy_per_grain_j_m {
+            break;
+        }
+        if steps >= st.max_steps {
+            return Err(DemError::Parameter {
+                name: "max_steps",
+                value: st.max_steps as f64,
+                why: "settling did not bring the kinetic energy per grain below \
+                      kinetic_energy_per_grain_j_m: raise max_steps or damping_1_s",
+            }
+            .into());
+        }
+    }
+    let settled = gather_grains(&d.system, comm);
+    // Keep the grains below the trim height, at rest, renumbered 0..N.
+    let mut g = Grains::default();
+    for i in 0..settled.len() {
+        if st.trim_above_m.is_some_and(|h| settled.y[i] > h) {
+            continue;
+        }
+        let mut p = Vec::with_capacity(Grains::PACKED);
+        settled.pack(i, &mut p);
+        p[2] = 0.0;
+        p[3] = 0.0;
+        p[5] = 0.0;
+        p[9] = f64::from_bits(g.len() as u64);
+        g.push_packed(&p);
+    }
+    Ok((g, steps))
+}
+
+/// A distributed system of `grains` with the scene's walls and contacts.
+fn start(
+    scene: &ValidGrainScene,
+    grains: Grains,
+    dt_of: &dyn Fn(&Grains) -> f64,
+    allow_overlap: bool,
+    comm: &dyn Comm,
+) -> Result<SlabDem, RunError> {
+    let s = &scene.scene;
+    let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
+    let cutoff = 2.0 * rmax + DemSystem::skin_for(rmax);
+    let bounds = balanced_bounds(
+        &grains.x,
+        s.region.min_m[0],
+        s.region.max_m[0],
+        comm.size(),
+        cutoff,
+    );
+    let lambda = match s.grains.time_step {
+        TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => lambda,
+    };
+    let dt = dt_of(&grains);
+    let mut d = SlabDem::new(
+        grains,
+        &bounds,
+        scene.walls(),
+        scene.contact_model(),
+        s.grains.gravity_m_s2,
+        dt,
+        lambda,
+        allow_overlap,
+        comm,
+    )?;
+    d.system.global_damping = s.grains.global_damping_1_s;
+    Ok(d)
+}
+
+/// Run a grains scene on every rank of `comm` (collective). Writes `grains.h5` +
+/// `grains.xdmf`, `pictures/grains_*.png` and (rank 0) `summary.json` into `opts.out_dir`.
+pub fn run_grains(
+    scene: &ValidGrainScene,
+    opts: &RunOptions,
+    comm: &dyn Comm,
+) -> Result<GrainSummary, RunError> {
+    let s = &scene.scene;
+    if comm.is_root() {
+        ensure_writable_dir(&opts.out_dir)?;
+        ensure_writable_dir(&opts.out_dir.join("pictures"))?;
+    }
+    comm.barrier();
+    let model = scene.contact_model();
+    let (lambda, fixed) = match s.grains.time_step {
+        TimeStepSpec::Critical { lambda } => (lambda, None),
+        TimeStepSpec::Fixed {
+            time_step_s,
+            lambda,
+        } => (lambda, Some(time_step_s)),
+    };
+    let dt_of = move |g: &Grains| fixed.unwrap_or_else(|| stable_time_step(g, &model, lambda));
+    let (grains, settle_steps) = prepare(scene, &dt_of, comm)?;
+    let settled = settle_steps > 0;
+    let allow = s.grains.allow_overlap || settled;
+    let mut d = start(scene, grains, &dt_of, allow, comm)?;
+    let n_total = d.global_count(comm);
+    let region = (s.region.min_m, s.region.max_m);
+    let mut writer = GrainWriter::create(&opts.out_dir, comm)?;
+    let mut stage = [0.0f64; GRAIN_STAGES.len()];
+    let initial = gather_grains(&d.system, comm);
+    let picture = |d: &SlabDem, vmax: f64| -> Result<(), RunError> {
+        let name = format!("grains_step_{:08}.png", d.system.steps);
+        write_grains_png(
+            &opts.out_dir.join("pictures").join(name),
+            &d.system,
+            region,
+            vmax,
+            comm,
+        )?;
+        Ok(())
+    };
+    writer.write(&d.system, comm)?;
+    if s.run.pictures {
+        picture(&d, 0.0)?;
+    }
+    // Speed scale of the pictures: free fall over the sample height, so frames compare.
+    let height = initial.y.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - initial.y.iter().cloned().fold(f64::INFINITY, f64::min);
+    let g_abs = s.grains.gravity_m_s2[0].hypot(s.grains.gravity_m_s2[1]);
+    let vmax = (2.0 * g_abs * height.max(1e-9)).sqrt();
+    let dt = d.system.dt;
+    let total_steps = (s.run.end_time_s / dt).ceil() as u64;
+    let mut progress = Progress::new(
+        total_steps,
+        n_total as f64,
+        dt,
+        opts.progress && comm.is_root(),
+    )
+    .with_unit("M grain-steps/s");
+    let last_removal = s
+        .grains
+        .walls
+        .iter()
+        .filter_map(|w| w.remove_at_s)
+        .fold(0.0, f64::max);
+    let mut next_output = s.run.output_every_s;
+    let mut stop_time = None;
+    let mut status = Status::Ok;
+    let mut error = None;
+    let t0 = Instant::now();
+    let mut step = 0;
+    while step < total_steps {
+        let t = Instant::now();
+        for (w, spec) in s.grains.walls.iter().enumerate() {
+            if spec.remove_at_s.is_some_and(|r| d.system.time >= r) && !d.system.walls[w].removed {
+                d.system.remove_wall(w);
+            }
+        }
+        stage[0] += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        d.step(comm);
+        step += 1;
+        stage[1] += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        if step % 100 == 0 || step == total_steps {
+            let (ke, _, _) = global_state(&d, comm);
+            if !ke.is_finite() {
+                status = Status::Unstable;
+                error = Some(format!(
+                    "the grains' kinetic energy is not finite at step {step} (t = {:.6e} s): \
+                     the time step is too large for these contacts; lower lambda",
+                    d.system.time
+                ));
+                break;
+            }
+            let quiet = s.run.stop_below_kinetic_energy_j_m > 0.0
+                && d.system.time > last_removal
+                && ke / (n_total as f64) < s.run.stop_below_kinetic_energy_j_m;
+            if quiet {
+                stop_time = Some(d.system.time);
+                break;
+            }
+        }
+        if s.run.output_every_s > 0.0 && d.system.time >= next_output {
+            next_output += s.run.output_every_s;
+            writer.write(&d.system, comm)?;
+            if s.run.pictures {
+                picture(&d, vmax)?;
+            }
+        }
+        stage[2] += t.elapsed().as_secs_f64();
+        progress.update(step);
+    }
+    progress.finish();
+    let wall = t0.elapsed().as_secs_f64();
+    if status == Status::Ok {
+        let t = Instant::now();
+        writer.write(&d.system, comm)?;
+        if s.run.pictures {
+            picture(&d, vmax)?;
+        }
+        stage[2] += t.elapsed().as_secs_f64();
+    }
+    // Analyses on the gathered deposit.
+    let mut results = Results::new();
+    let fin = gather_grains(&d.system, comm);
+    for a in &s.analyses {
+        match a {
+            GrainAnalysis::ColumnCollapse {
+                wall_x_m,
+                floor_y_m,
+            } => {
+                let before = pile_shape(&initial.x, &initial.y, &initial.r, *wall_x_m, *floor_y_m);
+                let after = pile_shape(&fin.x, &fin.y, &fin.r, *wall_x_m, *floor_y_m);
+                let (li, hi) = (before.length_m, before.height_m);
+                let tau_c = (hi / g_abs).sqrt();
+                let stopped = stop_time.unwrap_or(d.system.time) - last_removal;
+                for (k, v) in [
+                    ("runout", (after.length_m - li) / li),
+                    ("final_height", after.height_m / li),
+                    ("aspect_ratio", hi / li),
+                    ("front_m", after.length_m),
+                    ("height_m", after.height_m),
+                    ("initial_length_m", li),
+                    ("initial_height_m", hi),
+                    ("stop_time", stopped / tau_c),
+                ] {
+                    results.insert(format!("collapse.{k}"), v);
+                }
+            }
+        }
+    }
+    let checks = evaluate(&s.checks, &results);
+    if status == Status::Ok && checks.iter().any(|c| !c.passed) {
+        status = Status::ChecksFailed;
+    }
+    let all = comm.all_gather_f64(&stage);
+    let ranks = comm.size();
+    let mut stages = BTreeMap::new();
+    let mut stage_seconds = BTreeMap::new();
+    for (k, name) in GRAIN_STAGES.iter().enumerate() {
+        let v: Vec<f64> = (0..ranks)
+            .map(|r| all[r * GRAIN_STAGES.len() + k])
+            .collect();
+        let sum: f64 = v.iter().sum();
+        let max = v.iter().cloned().fold(0.0, f64::max);
+        let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
+        stages.insert(
+            *name,
+            StageStats {
+                sum_s: sum,
+                max_s: max,
+                min_s: min,
+                mean_s: sum / ranks as f64,
+            },
+        );
+        stage_seconds.insert(*name, max);
+    }
+    let (ke, momentum, _) = global_state(&d, comm);
+    let mut counts = [
+        d.migrated as f64,
+        d.system.contacts() as f64,
+        d.comm_seconds,
+    ];
+    let comm_wait = comm.max_f64(d.comm_seconds);
+    comm.sum_f64(&mut counts);
+    let summary = GrainSummary {
+        version: env!("CARGO_PKG_VERSION"),
+        scene_path: scene.path.clone(),
+        title: s.title.clone(),
+        scene: s.clone(),
+        status,
+        error,
+        warnings: scene.warnings.clone(),
+        ranks,
+        threads: rayon::current_num_threads(),
+        slab_bounds_m: d.bounds().to_vec(),
+        grains: n_total,
+        time_step_s: dt,
+        lambda,
+        settle_steps,
+        steps: step,
+        simulated_time_s: d.system.time,
+        wall_time_s: wall,
+        grain_steps_per_s: n_total as f64 * step as f64 / wall.max(1e-12),
+        stage_seconds,
+        stages,
+        migrated: counts[0] as u64,
+        comm_wait_s: comm_wait,
+        contacts: counts[1] as usize,
+        list_rebuilds: d.system.list_rebuilds(),
+        kinetic_energy_j_m: ke,
+        momentum,
+        snapshots: writer.snapshots(),
+        results,
+        checks,
+    };
+    if comm.is_root() {
+        let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");
+        write_atomic(&opts.out_dir.join("summary.json"), &json)?;
+    }
+    Ok(summary)
+}
