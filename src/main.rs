@@ -108,14 +108,15 @@ fn real_main() -> Result<i32> {
             let s = match scene::load_any(&scene)? {
                 scene::AnyScene::Fluid(s) => *s,
                 scene::AnyScene::Grains(g) => {
-                    if restart.is_some() || precision.is_some() || backend.is_some() {
+                    if precision.is_some() || backend.is_some() || steps.is_some() {
                         anyhow::bail!(
-                            "--restart, --precision and --backend apply to fluid scenes; \
-                             {} is a grains scene (DEM in f64 on the CPU)",
+                            "--precision, --backend and --steps apply to fluid scenes; \
+                             {} is a grains scene (DEM in f64 on the CPU; its length is \
+                             [run] end_time_s)",
                             scene.display()
                         );
                     }
-                    return run_grain_scene(&g, out, !quiet, comm);
+                    return run_grain_scene(&g, out, !quiet, restart, comm);
                 }
             };
             for w in &s.warnings {
@@ -223,6 +224,7 @@ fn run_grain_scene(
     g: &scene::ValidGrainScene,
     out: std::path::PathBuf,
     progress: bool,
+    restart: Option<std::path::PathBuf>,
     comm: &dyn decomposition::Comm,
 ) -> Result<i32> {
     for w in &g.warnings {
@@ -237,7 +239,7 @@ fn run_grain_scene(
         gpu_storage: None,
         steps: None,
         progress,
-        restart: None,
+        restart,
     };
     if comm.is_root() {
         eprintln!(
@@ -282,8 +284,14 @@ fn run_grain_scene(
     if let Some(e) = &summary.error {
         eprintln!("error: {e}");
     }
-    if summary.status == Status::ChecksFailed {
-        eprintln!("error: at least one check failed");
+    match summary.status {
+        Status::ChecksFailed => eprintln!("error: at least one check failed"),
+        Status::Interrupted => eprintln!(
+            "stopped by SIGTERM at step {}; continue with --restart {}",
+            summary.steps,
+            out.join("checkpoint.h5").display()
+        ),
+        _ => {}
     }
     Ok(exit_code(summary.status))
 }

@@ -212,7 +212,7 @@ pub fn step_count(scene: &ValidScene, override_steps: Option<u64>) -> u64 {
 }
 
 /// SIGTERM (stop) and SIGUSR1 (checkpoint and go on) flags, registered once per process.
-fn signal_flags() -> &'static [Arc<AtomicBool>; 2] {
+pub(crate) fn signal_flags() -> &'static [Arc<AtomicBool>; 2] {
     static FLAGS: OnceLock<[Arc<AtomicBool>; 2]> = OnceLock::new();
     FLAGS.get_or_init(|| {
         let flags = [

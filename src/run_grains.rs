@@ -9,6 +9,7 @@ use crate::dem::parallel::balanced_bounds;
 use crate::dem::sample::{load_csv, random_sequential_addition};
 use crate::dem::{stable_time_step, DemError, DemSystem, Grains, SlabDem};
 use crate::io::atomic::{ensure_writable_dir, write_atomic};
+use crate::io::grains_checkpoint::{self, apply_walls, GrainRunState};
 use crate::io::grains_out::{write_grains_png, GrainWriter};
 use crate::progress::Progress;
 use crate::run::{RunError, RunOptions, StageStats, Status};
@@ -18,6 +19,8 @@ use crate::scene::{
 use decomposition::Comm;
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// Stages of a grains step, in order.
@@ -54,6 +57,10 @@ pub struct GrainSummary {
     pub lambda: f64,
     /// Steps spent settling the sample (0 when it was not settled).
     pub settle_steps: u64,
+    /// Step the run started from (0, or the checkpoint's step on a restart).
+    pub restarted_from_step: u64,
+    /// Checkpoints written during the run.
+    pub checkpoints: Vec<PathBuf>,
     /// Steps of the run.
     pub steps: u64,
     /// Simulated time (s).
@@ -198,6 +205,27 @@ fn prepare(
     Ok((g, steps))
 }
 
+/// Slab boundaries for `grains` over the ranks of `comm`, balanced by grain count.
+fn bounds_for(scene: &ValidGrainScene, grains: &Grains, comm: &dyn Comm) -> Vec<f64> {
+    let s = &scene.scene;
+    let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
+    let cutoff = 2.0 * rmax + DemSystem::skin_for(rmax);
+    balanced_bounds(
+        &grains.x,
+        s.region.min_m[0],
+        s.region.max_m[0],
+        comm.size(),
+        cutoff,
+    )
+}
+
+/// λ of the scene's time-step choice.
+fn lambda_of(scene: &ValidGrainScene) -> f64 {
+    match scene.scene.grains.time_step {
+        TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => lambda,
+    }
+}
+
 /// A distributed system of `grains` with the scene's walls and contacts.
 fn start(
     scene: &ValidGrainScene,
@@ -207,18 +235,8 @@ fn start(
     comm: &dyn Comm,
 ) -> Result<SlabDem, RunError> {
     let s = &scene.scene;
-    let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
-    let cutoff = 2.0 * rmax + DemSystem::skin_for(rmax);
-    let bounds = balanced_bounds(
-        &grains.x,
-        s.region.min_m[0],
-        s.region.max_m[0],
-        comm.size(),
-        cutoff,
-    );
-    let lambda = match s.grains.time_step {
-        TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => lambda,
-    };
+    let bounds = bounds_for(scene, &grains, comm);
+    let lambda = lambda_of(scene);
     let dt = dt_of(&grains);
     let mut d = SlabDem::new(
         grains,
@@ -257,15 +275,51 @@ pub fn run_grains(
         } => (lambda, Some(time_step_s)),
     };
     let dt_of = move |g: &Grains| fixed.unwrap_or_else(|| stable_time_step(g, &model, lambda));
-    let (grains, settle_steps) = prepare(scene, &dt_of, comm)?;
-    let settled = settle_steps > 0;
-    let allow = s.grains.allow_overlap || settled;
-    let mut d = start(scene, grains, &dt_of, allow, comm)?;
+    let restored = match &opts.restart {
+        Some(p) => Some(grains_checkpoint::read(p, comm, s.grains.walls.len())?),
+        None => None,
+    };
+    let (mut d, settle_steps, initial, resume) = match restored {
+        None => {
+            let (grains, settle_steps) = prepare(scene, &dt_of, comm)?;
+            let allow = s.grains.allow_overlap || settle_steps > 0;
+            let d = start(scene, grains, &dt_of, allow, comm)?;
+            let initial = gather_grains(&d.system, comm);
+            (d, settle_steps, initial, None)
+        }
+        Some(r) => {
+            let mut walls = scene.walls();
+            apply_walls(&mut walls, &r.walls);
+            let bounds = bounds_for(scene, &r.grains, comm);
+            let dt = dt_of(&r.grains);
+            let mut d = SlabDem::restore(
+                r.grains,
+                r.history,
+                &bounds,
+                walls,
+                model,
+                s.grains.gravity_m_s2,
+                dt,
+                lambda,
+                r.run.time_s,
+                r.run.step,
+                comm,
+            )?;
+            d.system.global_damping = s.grains.global_damping_1_s;
+            if comm.is_root() {
+                d.migrated = r.run.migrated;
+            }
+            let mut initial = Grains::default();
+            for p in r.run.initial.chunks_exact(3) {
+                initial.push([p[0], p[1]], p[2], s.grains.density_kg_m3, false);
+            }
+            (d, r.run.settle_steps, initial, Some(r.run))
+        }
+    };
     let n_total = d.global_count(comm);
     let region = (s.region.min_m, s.region.max_m);
     let mut writer = GrainWriter::create(&opts.out_dir, comm)?;
     let mut stage = [0.0f64; GRAIN_STAGES.len()];
-    let initial = gather_grains(&d.system, comm);
     let picture = |d: &SlabDem, vmax: f64| -> Result<(), RunError> {
         let name = format!("grains_step_{:08}.png", d.system.steps);
         write_grains_png(
@@ -277,9 +331,11 @@ pub fn run_grains(
         )?;
         Ok(())
     };
-    writer.write(&d.system, comm)?;
-    if s.run.pictures {
-        picture(&d, 0.0)?;
+    if resume.is_none() {
+        writer.write(&d.system, comm)?;
+        if s.run.pictures {
+            picture(&d, 0.0)?;
+        }
     }
     // Speed scale of the pictures: free fall over the sample height, so frames compare.
     let height = initial.y.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
@@ -301,12 +357,34 @@ pub fn run_grains(
         .iter()
         .filter_map(|w| w.remove_at_s)
         .fold(0.0, f64::max);
-    let mut next_output = s.run.output_every_s;
+    let mut next_output = resume
+        .as_ref()
+        .map_or(s.run.output_every_s, |r| r.next_output_s);
+    let start_step = resume.as_ref().map_or(0, |r| r.step);
     let mut stop_time = None;
     let mut status = Status::Ok;
     let mut error = None;
+    let flags = crate::run::signal_flags();
+    let checkpoint_path = opts.out_dir.join("checkpoint.h5");
+    let mut checkpoints = Vec::new();
+    let initial_rows: Vec<f64> = (0..initial.len())
+        .flat_map(|i| [initial.x[i], initial.y[i], initial.r[i]])
+        .collect();
+    let write_checkpoint = |d: &SlabDem, next_output: f64, list: &mut Vec<PathBuf>| {
+        let state = GrainRunState {
+            step: d.system.steps,
+            time_s: d.system.time,
+            next_output_s: next_output,
+            settle_steps,
+            migrated: d.migrated,
+            initial: initial_rows.clone(),
+        };
+        grains_checkpoint::write(&checkpoint_path, comm, d, &state)?;
+        list.push(checkpoint_path.clone());
+        Ok::<(), RunError>(())
+    };
     let t0 = Instant::now();
-    let mut step = 0;
+    let mut step = start_step;
     while step < total_steps {
         let t = Instant::now();
         for (w, spec) in s.grains.walls.iter().enumerate() {
@@ -346,11 +424,30 @@ pub fn run_grains(
                 picture(&d, vmax)?;
             }
         }
+        // After the snapshot, so a restart does not write it again. Signals are agreed on
+        // by all ranks (every 100 steps), so all ranks checkpoint together.
+        let (mut term, mut usr1) = (false, false);
+        if step % 100 == 0 {
+            term = comm.any(flags[0].load(Ordering::Relaxed));
+            usr1 = comm.any(flags[1].swap(false, Ordering::Relaxed));
+        }
+        let every = s.run.checkpoint_every > 0 && step % s.run.checkpoint_every == 0;
+        if term || usr1 || every {
+            write_checkpoint(&d, next_output, &mut checkpoints)?;
+        }
+        if term {
+            status = Status::Interrupted;
+            stage[2] += t.elapsed().as_secs_f64();
+            break;
+        }
         stage[2] += t.elapsed().as_secs_f64();
         progress.update(step);
     }
     progress.finish();
     let wall = t0.elapsed().as_secs_f64();
+    if status == Status::Ok && s.run.checkpoint_at_end {
+        write_checkpoint(&d, next_output, &mut checkpoints)?;
+    }
     if status == Status::Ok {
         let t = Instant::now();
         writer.write(&d.system, comm)?;
@@ -437,10 +534,12 @@ pub fn run_grains(
         time_step_s: dt,
         lambda,
         settle_steps,
+        restarted_from_step: start_step,
+        checkpoints,
         steps: step,
         simulated_time_s: d.system.time,
         wall_time_s: wall,
-        grain_steps_per_s: n_total as f64 * step as f64 / wall.max(1e-12),
+        grain_steps_per_s: n_total as f64 * (step - start_step) as f64 / wall.max(1e-12),
         stage_seconds,
         stages,
         migrated: counts[0] as u64,

@@ -45,6 +45,21 @@ impl DemSystem {
             .collect()
     }
 
+    /// The live contact history this rank accounts for: pairs whose smaller-id grain is
+    /// owned, and the owned grains' wall contacts. Over all ranks, every contact once.
+    pub fn owned_history(&self) -> Vec<((u64, u64), f64)> {
+        let id = &self.grains.id;
+        let mut out: Vec<((u64, u64), f64)> = self
+            .candidates
+            .iter()
+            .zip(&self.stretch)
+            .filter(|(&(a, _), s)| (a as usize) < self.owned && **s != 0.0)
+            .map(|(&(a, b), &s)| ((id[a as usize], id[b as usize]), s))
+            .collect();
+        out.extend(self.history.iter().map(|(k, v)| (*k, *v)));
+        out
+    }
+
     /// Rebuild the Verlet list over the current grains (owned and ghosts) with skin
     /// [`DemSystem::skin_for`] of the largest radius here, carrying the tangential stretch
     /// of every live contact over to it.

@@ -70,8 +70,7 @@ impl SlabDem {
         allow_overlap: bool,
         comm: &dyn Comm,
     ) -> Result<Self, DemError> {
-        let (rank, size) = (comm.rank(), comm.size());
-        assert_eq!(bounds.len(), size + 1, "one boundary per rank face");
+        assert_eq!(bounds.len(), comm.size() + 1, "one boundary per rank face");
         // Every check on the global set, so every rank reports the same error.
         DemSystem::unstarted(
             all.clone(),
@@ -82,20 +81,62 @@ impl SlabDem {
             lambda,
             allow_overlap,
         )?;
+        let mut s = Self::assemble(all, bounds, walls, model, gravity, dt, lambda, comm)?;
+        s.rebuild(comm, HistoryMap::default());
+        s.system.compute_forces();
+        Ok(s)
+    }
+
+    /// Continue a checkpointed system: `all` holds every grain with the forces of its last
+    /// evaluation, `history` every live contact's stretch (pairs and walls), `walls` their
+    /// state then. Forces are not recomputed (see `io::grains_checkpoint`). Collective.
+    #[allow(clippy::too_many_arguments)]
+    pub fn restore(
+        all: Grains,
+        history: HistoryMap,
+        bounds: &[f64],
+        walls: Vec<super::Wall>,
+        model: super::ContactModel,
+        gravity: [f64; 2],
+        dt: f64,
+        lambda: f64,
+        time: f64,
+        steps: u64,
+        comm: &dyn Comm,
+    ) -> Result<Self, DemError> {
+        let mut s = Self::assemble(all, bounds, walls, model, gravity, dt, lambda, comm)?;
+        s.system.time = time;
+        s.system.steps = steps;
+        let (pairs, walls): (HistoryMap, HistoryMap) =
+            history.into_iter().partition(|(k, _)| k.1 & WALL_KEY == 0);
+        s.system.history = walls;
+        s.rebuild(comm, pairs);
+        Ok(s)
+    }
+
+    /// This rank's grains of `all` in a system with no list yet.
+    #[allow(clippy::too_many_arguments)]
+    fn assemble(
+        all: Grains,
+        bounds: &[f64],
+        walls: Vec<super::Wall>,
+        model: super::ContactModel,
+        gravity: [f64; 2],
+        dt: f64,
+        lambda: f64,
+        comm: &dyn Comm,
+    ) -> Result<Self, DemError> {
+        let (rank, size) = (comm.rank(), comm.size());
         let rmax = all.r.iter().cloned().fold(0.0, f64::max);
         let skin = DemSystem::skin_for(rmax);
         let cutoff = 2.0 * rmax + skin;
-        if size > 1 {
-            for w in bounds.windows(2) {
-                if w[1] - w[0] < cutoff {
-                    return Err(DemError::Parameter {
-                        name: "ranks",
-                        value: size as f64,
-                        why: "too many ranks: a slab is narrower than the ghost cutoff \
-                              2 r_max + skin; use fewer ranks or a wider domain",
-                    });
-                }
-            }
+        if size > 1 && bounds.windows(2).any(|w| w[1] - w[0] < cutoff) {
+            return Err(DemError::Parameter {
+                name: "ranks",
+                value: size as f64,
+                why: "too many ranks: a slab is narrower than the ghost cutoff 2 r_max + skin; \
+                      use fewer ranks or a wider region",
+            });
         }
         let (lo, hi) = (bounds[rank], bounds[rank + 1]);
         let keep: Vec<bool> = (0..all.len())
@@ -104,7 +145,7 @@ impl SlabDem {
         let mut mine = all;
         mine.retain(&keep);
         let system = DemSystem::unstarted(mine, walls, model, gravity, dt, lambda, true)?;
-        let mut s = Self {
+        Ok(Self {
             system,
             bounds: bounds.to_vec(),
             lo,
@@ -119,10 +160,7 @@ impl SlabDem {
             migrated: 0,
             comm_seconds: 0.0,
             bufs: Default::default(),
-        };
-        s.rebuild(comm, HistoryMap::default());
-        s.system.compute_forces();
-        Ok(s)
+        })
     }
 
     /// One velocity-Verlet step on every rank (collective).

@@ -70,6 +70,17 @@ pub fn write<T: H5Type + Copy>(
     lattice: &LatticeState<'_, T>,
     run: &RunState,
 ) -> Result<(), OutputError> {
+    write_atomically(path, comm, &|file, access| fill(file, access, lattice, run))
+}
+
+/// Create `path.tmp` on every rank, let `fill` write it (collectively), then fsync it and
+/// rename it over `path` on rank 0 once every rank has closed it: the new name appears only
+/// for a complete file. Collective.
+pub fn write_atomically(
+    path: &Path,
+    comm: &dyn Comm,
+    fill: &dyn Fn(&hdf5::File, Access) -> hdf5::Result<()>,
+) -> Result<(), OutputError> {
     let tmp = PathBuf::from(format!("{}.tmp", path.display()));
     let h5 = |source| OutputError::Hdf5 {
         path: tmp.clone(),
@@ -77,7 +88,7 @@ pub fn write<T: H5Type + Copy>(
     };
     {
         let (file, access) = h5par::create(&tmp, comm).map_err(h5)?;
-        fill(&file, access, lattice, run).map_err(h5)?;
+        fill(&file, access).map_err(h5)?;
         file.flush().map_err(h5)?;
         // Every group and dataset is closed by now: MPI-IO files refuse to close otherwise.
         drop(file);

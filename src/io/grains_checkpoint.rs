@@ -1,0 +1,263 @@
+//! Checkpoints of grains runs: every grain's full state including the forces of the last
+//! evaluation, the tangential history of every contact, the walls, and the run's counters.
+//! Written atomically and collectively (each rank its own rows); read by any rank count.
+//!
+//! Forces are stored rather than recomputed on restart because evaluating them advances the
+//! tangential springs and uses the half-step velocities, which are gone: with the stored
+//! forces a restarted run continues bit for bit.
+
+use super::checkpoint::write_atomically;
+use super::h5par::{self, Access, Block};
+use super::OutputError;
+use crate::dem::system::{HistoryMap, WALL_KEY};
+use crate::dem::{Grains, SlabDem, Wall};
+use decomposition::Comm;
+use hdf5::types::VarLenUnicode;
+use std::path::Path;
+
+/// `format` attribute of a grains checkpoint.
+pub const FORMAT: &str = "grainflow-grains-checkpoint";
+/// Version of the layout below.
+pub const FORMAT_VERSION: u32 = 1;
+/// Values per grain row: [`Grains::pack`] then fx, fy, torque.
+const ROW: usize = Grains::PACKED + 3;
+
+/// Counters of a grains run that a restart needs besides the grains.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GrainRunState {
+    /// Steps taken.
+    pub step: u64,
+    /// Simulated time (s).
+    pub time_s: f64,
+    /// Time of the next snapshot (s).
+    pub next_output_s: f64,
+    /// Steps spent settling the sample.
+    pub settle_steps: u64,
+    /// Grains migrated so far (this rank's, summed on write).
+    pub migrated: u64,
+    /// (x, y, r) of every grain when the run started, by id (for the analyses).
+    pub initial: Vec<f64>,
+}
+
+/// What a restart reads: the run state, every grain (with forces), the contact history,
+/// and each wall's ends and removal flag.
+pub struct RestoredGrains {
+    /// Counters.
+    pub run: GrainRunState,
+    /// Every grain, sorted by id.
+    pub grains: Grains,
+    /// Pair and wall contact history.
+    pub history: HistoryMap,
+    /// Per wall: a, b, removed.
+    pub walls: Vec<([f64; 2], [f64; 2], bool)>,
+}
+
+fn err(path: &Path, message: impl Into<String>) -> OutputError {
+    OutputError::Checkpoint {
+        path: path.to_owned(),
+        message: message.into(),
+    }
+}
+
+/// This rank's rows of a global `[rows, cols]` f64 dataset, written collectively.
+fn write_rows(
+    g: &hdf5::Group,
+    name: &str,
+    local: &[f64],
+    cols: usize,
+    comm: &dyn Comm,
+    access: Access,
+) -> hdf5::Result<()> {
+    let rows = (local.len() / cols) as f64;
+    let all = comm.all_gather_f64(&[rows]);
+    let offset: f64 = all[..comm.rank()].iter().sum();
+    let total = all.iter().sum::<f64>() as usize;
+    let ds = g.new_dataset::<f64>().shape([total, cols]).create(name)?;
+    let block = Block {
+        start: vec![offset as u64, 0],
+        count: vec![rows as u64, cols as u64],
+    };
+    h5par::write_block(&ds, &block, local, access)
+}
+
+/// Write the checkpoint of `d` to `path` (collective, atomic).
+pub fn write(
+    path: &Path,
+    comm: &dyn Comm,
+    d: &SlabDem,
+    run: &GrainRunState,
+) -> Result<(), OutputError> {
+    let sys = &d.system;
+    let g = &sys.grains;
+    let mut rows = Vec::with_capacity(sys.owned() * ROW);
+    for i in 0..sys.owned() {
+        g.pack(i, &mut rows);
+        rows.extend_from_slice(&[g.fx[i], g.fy[i], g.torque[i]]);
+    }
+    // Each contact once: a pair by the owner of its smaller-id grain, a wall contact by the
+    // grain's owner.
+    let mut history = Vec::new();
+    for ((a, b), s) in sys.owned_history() {
+        history.extend_from_slice(&[f64::from_bits(a), f64::from_bits(b), s]);
+    }
+    let mut walls = Vec::new();
+    for w in &sys.walls {
+        walls.extend_from_slice(&[w.a[0], w.a[1], w.b[0], w.b[1], w.removed as u8 as f64]);
+    }
+    let mut migrated = [run.migrated as f64];
+    comm.sum_f64(&mut migrated);
+    let fill = |file: &hdf5::File, access: Access| -> hdf5::Result<()> {
+        let text = |name: &str, v: &str| {
+            let v: VarLenUnicode = v.parse().expect("ASCII attribute");
+            file.new_attr::<VarLenUnicode>()
+                .create(name)
+                .and_then(|a| a.write_scalar(&v))
+        };
+        text("format", FORMAT)?;
+        text("grainflow_version", env!("CARGO_PKG_VERSION"))?;
+        file.new_attr::<u32>()
+            .create("format_version")
+            .and_then(|a| a.write_scalar(&FORMAT_VERSION))?;
+        for (name, v) in [("step", run.step), ("settle_steps", run.settle_steps)] {
+            file.new_attr::<u64>()
+                .create(name)
+                .and_then(|a| a.write_scalar(&v))?;
+        }
+        for (name, v) in [
+            ("time_s", run.time_s),
+            ("next_output_s", run.next_output_s),
+            ("migrated", migrated[0]),
+        ] {
+            file.new_attr::<f64>()
+                .create(name)
+                .and_then(|a| a.write_scalar(&v))?;
+        }
+        let dem = file.create_group("dem")?;
+        write_rows(&dem, "grains", &rows, ROW, comm, access)?;
+        write_rows(&dem, "history", &history, 3, comm, access)?;
+        // Identical on every rank: rank 0's rows only.
+        let root_only = |v: &[f64]| {
+            if comm.is_root() {
+                v.to_vec()
+            } else {
+                Vec::new()
+            }
+        };
+        write_rows(&dem, "walls", &root_only(&walls), 5, comm, access)?;
+        write_rows(&dem, "initial", &root_only(&run.initial), 3, comm, access)?;
+        Ok(())
+    };
+    write_atomically(path, comm, &fill)
+}
+
+/// Read a grains checkpoint (every rank reads everything). `walls` is the scene's wall
+/// count, which the file must match. Collective.
+pub fn read(path: &Path, comm: &dyn Comm, walls: usize) -> Result<RestoredGrains, OutputError> {
+    if !path.is_file() {
+        return Err(err(
+            path,
+            "no such file; give the checkpoint.h5 of a grains run",
+        ));
+    }
+    let bad = |e: hdf5::Error| {
+        err(
+            path,
+            format!("unreadable (truncated, or not a grainflow checkpoint): {e}"),
+        )
+    };
+    let (file, _) = h5par::open(path, comm, false).map_err(bad)?;
+    let format = file
+        .attr("format")
+        .and_then(|a| a.read_scalar::<VarLenUnicode>())
+        .map_err(bad)?
+        .to_string();
+    if format != FORMAT {
+        return Err(err(
+            path,
+            format!("a `{format}` file, not a grains checkpoint; restart a grains scene from the checkpoint.h5 its run wrote"),
+        ));
+    }
+    let version = file
+        .attr("format_version")
+        .and_then(|a| a.read_scalar::<u32>())
+        .map_err(bad)?;
+    if version != FORMAT_VERSION {
+        return Err(err(
+            path,
+            format!("format version {version}, this grainflow reads {FORMAT_VERSION}"),
+        ));
+    }
+    let u = |n: &str| {
+        file.attr(n)
+            .and_then(|a| a.read_scalar::<u64>())
+            .map_err(bad)
+    };
+    let f = |n: &str| {
+        file.attr(n)
+            .and_then(|a| a.read_scalar::<f64>())
+            .map_err(bad)
+    };
+    let data = |n: &str, cols: usize| -> Result<Vec<f64>, OutputError> {
+        let ds = file.dataset(&format!("dem/{n}")).map_err(bad)?;
+        if ds.ndim() != 2 || ds.shape()[1] != cols {
+            return Err(err(path, format!("/dem/{n} must have {cols} columns")));
+        }
+        ds.read_raw::<f64>().map_err(bad)
+    };
+    let rows = data("grains", ROW)?;
+    let mut sorted: Vec<&[f64]> = rows.chunks_exact(ROW).collect();
+    sorted.sort_by_key(|r| r[9].to_bits());
+    let mut grains = Grains::default();
+    for r in sorted {
+        grains.push_packed(&r[..Grains::PACKED]);
+        let i = grains.len() - 1;
+        grains.fx[i] = r[10];
+        grains.fy[i] = r[11];
+        grains.torque[i] = r[12];
+    }
+    let history = data("history", 3)?
+        .chunks_exact(3)
+        .map(|h| ((h[0].to_bits(), h[1].to_bits()), h[2]))
+        .collect();
+    let wall_rows = data("walls", 5)?;
+    if wall_rows.len() / 5 != walls {
+        return Err(err(
+            path,
+            format!(
+                "holds {} walls, the scene {walls}; restart with the scene that wrote it",
+                wall_rows.len() / 5
+            ),
+        ));
+    }
+    let walls = wall_rows
+        .chunks_exact(5)
+        .map(|w| ([w[0], w[1]], [w[2], w[3]], w[4] != 0.0))
+        .collect();
+    Ok(RestoredGrains {
+        run: GrainRunState {
+            step: u("step")?,
+            time_s: f("time_s")?,
+            next_output_s: f("next_output_s")?,
+            settle_steps: u("settle_steps")?,
+            migrated: f("migrated")? as u64,
+            initial: data("initial", 3)?,
+        },
+        grains,
+        history,
+        walls,
+    })
+}
+
+/// Apply restored wall ends and removal flags to `walls` (in scene order).
+pub fn apply_walls(walls: &mut [Wall], restored: &[([f64; 2], [f64; 2], bool)]) {
+    for (w, &(a, b, removed)) in walls.iter_mut().zip(restored) {
+        w.a = a;
+        w.b = b;
+        w.removed = removed;
+    }
+}
+
+/// Whether a history key belongs to a wall contact.
+pub fn is_wall_key(key: (u64, u64)) -> bool {
+    key.1 & WALL_KEY != 0
+}
