@@ -63,6 +63,14 @@ fn snapshots(dir: &Path) -> Vec<Snapshot> {
                 continue;
             }
             let v = grp.dataset(&name).unwrap().read_raw::<f64>().unwrap();
+            if name == "contacts" {
+                // The contact network: rows (id a, id b, point, force) in rank order.
+                let mut rows: Vec<&[f64]> = v.chunks_exact(6).collect();
+                rows.sort_by(|p, q| (p[0], p[1]).partial_cmp(&(q[0], q[1])).unwrap());
+                assert!(rows.len() > 100, "{g}: {} contacts", rows.len());
+                sets.push((name, rows.concat()));
+                continue;
+            }
             let w = v.len() / ids.len();
             let sorted: Vec<f64> = order
                 .iter()

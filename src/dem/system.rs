@@ -270,6 +270,25 @@ impl DemSystem {
         pairs + self.wall_hits.iter().flatten().count()
     }
 
+    /// The touching grain pairs this rank accounts for (see [`DemSystem::contacts`]) as
+    /// (id a, id b, contact point (m), force on b (N/m)), id a < id b; the force on a is the
+    /// opposite. As of the last force evaluation.
+    pub fn contact_list(&self) -> Vec<(u64, u64, [f64; 2], [f64; 2])> {
+        let g = &self.grains;
+        self.candidates
+            .iter()
+            .zip(&self.pair_results)
+            .filter(|(&(a, _), r)| (a as usize) < self.owned && r[4] > 0.0)
+            .map(|(&(a, b), r)| {
+                let (a, b) = (a as usize, b as usize);
+                let (dx, dy) = (g.x[b] - g.x[a], g.y[b] - g.y[a]);
+                let d = dx.hypot(dy).max(1e-300);
+                let p = [g.x[a] + dx / d * g.r[a], g.y[a] + dy / d * g.r[a]];
+                (g.id[a], g.id[b], p, [r[0], r[1]])
+            })
+            .collect()
+    }
+
     /// Kinetic + gravitational potential + elastic contact energy of what this rank owns
     /// (J/m; pairs as in [`DemSystem::contacts`]).
     pub fn energy(&self) -> f64 {

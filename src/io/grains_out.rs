@@ -23,7 +23,8 @@ pub struct GrainWriter {
     written: Vec<(String, f64, u64)>,
 }
 
-/// Datasets of a snapshot: name, components, units.
+/// Per-grain datasets of a snapshot: name, components, units. Each snapshot also holds
+/// `id` and `contacts` (the contact network, one row per touching pair).
 const DATASETS: [(&str, usize, &str); 6] = [
     ("position", 3, "m"),
     ("velocity", 3, "m/s"),
@@ -134,6 +135,34 @@ impl GrainWriter {
             count: vec![n as u64],
         };
         h5par::write_block(&ds, &block, &g.id[..n], self.access).map_err(h5)?;
+        // The contact network: one row per touching pair, written by the owner of its
+        // smaller-id grain.
+        let list = sys.contact_list();
+        let mut rows = Vec::with_capacity(list.len() * 6);
+        for (a, b, p, f) in &list {
+            rows.extend_from_slice(&[*a as f64, *b as f64, p[0], p[1], f[0], f[1]]);
+        }
+        let counts = comm.all_gather_f64(&[list.len() as f64]);
+        let start: f64 = counts[..comm.rank()].iter().sum();
+        let total_c: f64 = counts.iter().sum();
+        let ds = grp
+            .new_dataset::<f64>()
+            .shape([total_c as usize, 6])
+            .create("contacts")
+            .map_err(h5)?;
+        let block = Block {
+            start: vec![start as u64, 0],
+            count: vec![list.len() as u64, 6],
+        };
+        h5par::write_block(&ds, &block, &rows, self.access).map_err(h5)?;
+        let what: hdf5::types::VarLenUnicode =
+            "id_a, id_b, contact x (m), contact y (m), force on b x (N/m), force on b y (N/m)"
+                .parse()
+                .expect("ASCII");
+        ds.new_attr::<hdf5::types::VarLenUnicode>()
+            .create("columns")
+            .and_then(|a| a.write_scalar(&what))
+            .map_err(h5)?;
         self.file.flush().map_err(h5)?;
         self.written.push((group, sys.time, total));
         if self.root {
