@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Run-out of the column-collapse sweep against the published laws.
 
-Reads runs/column-collapse/a*/summary.json (written by jobs/column-collapse/run.sh), prints
-a table of (L_f - L_i)/L_i and H_f/L_i against the 2-D DEM law and the experiments
-(../shared/reference/README.md), fits the exponents of both regimes, and draws run-out vs a
-on log axes with the reference lines (matplotlib; the table is printed without it).
+Reads runs/column-collapse/a<a>[-s<seed>]/summary.json (written by jobs/column-collapse/run.sh),
+averages the packings (seeds) of each aspect ratio, prints a table of (L_f - L_i)/L_i and H_f/L_i
+against the 2-D DEM law and the experiments (../shared/reference/README.md), fits the exponents
+of both regimes (split at the DEM law's transition a = 2.7), and draws run-out vs a on log axes
+with the reference lines (matplotlib; the table is printed without it).
 """
 import argparse
 import glob
@@ -34,23 +35,30 @@ def main():
     p.add_argument("runs", help="folder with one run folder per aspect ratio")
     p.add_argument("--out", default=None, help="PNG to write")
     args = p.parse_args()
-    rows = []
+    groups = {}
     for f in sorted(glob.glob(os.path.join(args.runs, "*", "summary.json"))):
-        s = json.load(open(f))
-        r = s["results"]
-        rows.append((r["collapse.aspect_ratio"], r["collapse.runout"], r["collapse.final_height"],
-                     r["collapse.stop_time"], s["grains"]))
+        name = os.path.basename(os.path.dirname(f)).split("-s")[0]
+        r = json.load(open(f))
+        groups.setdefault(name, []).append(r)
+    rows = []
+    for name, runs in groups.items():
+        res = [r["results"] for r in runs]
+        mean = lambda k: sum(x[k] for x in res) / len(res)
+        std = lambda k: (sum((x[k] - mean(k)) ** 2 for x in res) / max(len(res) - 1, 1)) ** 0.5
+        rows.append((mean("collapse.aspect_ratio"), mean("collapse.runout"), std("collapse.runout"),
+                     mean("collapse.final_height"), mean("collapse.stop_time"),
+                     sum(r["grains"] for r in runs) // len(runs), len(runs)))
     rows.sort()
-    print(f"{'a':>6} {'grains':>7} {'runout':>8} {'DEM law':>8} {'dev':>7} {'exp.':>7} {'dev':>7} {'H_f/L_i':>8} {'t_stop/tau_c':>12}")
-    for a, r, h, t, n in rows:
+    print(f"{'a':>6} {'grains':>7} {'runs':>4} {'runout':>14} {'DEM law':>8} {'dev':>7} {'exp.':>7} {'dev':>7} {'H_f/L_i':>8} {'t_stop/tau_c':>12}")
+    for a, r, sd, h, t, n, k in rows:
         d, e = law(a, DEM), law(a, EXP)
-        print(f"{a:6.2f} {n:7d} {r:8.3f} {d:8.3f} {100*(r/d-1):+6.1f}% {e:7.3f} {100*(r/e-1):+6.1f}% {h:8.3f} {t:12.2f}")
-    low = [(a, r) for a, r, *_ in rows if a < 1.8]
-    high = [(a, r) for a, r, *_ in rows if a > 3.0]
+        print(f"{a:6.2f} {n:7d} {k:4d} {r:7.3f} ± {sd:5.3f} {d:8.3f} {100*(r/d-1):+6.1f}% {e:7.3f} {100*(r/e-1):+6.1f}% {h:8.3f} {t:12.2f}")
+    low = [(a, r) for a, r, *_ in rows if a < DEM[2]]
+    high = [(a, r) for a, r, *_ in rows if a > DEM[2]]
     if len(low) >= 2:
-        print(f"exponent below the transition (a < 1.8): {fit(low):.3f} (published ~1)")
+        print(f"exponent below the transition (a < {DEM[2]}): {fit(low):.3f} (published ~1)")
     if len(high) >= 2:
-        print(f"exponent above the transition (a > 3):   {fit(high):.3f} (published ~2/3)")
+        print(f"exponent above the transition (a > {DEM[2]}): {fit(high):.3f} (published ~2/3)")
     if len(low) >= 2 and len(high) >= 2:
         # Intersection of the two fitted power laws.
         sl, sh = fit(low), fit(high)
@@ -70,7 +78,8 @@ def main():
         plt.figure(figsize=(6, 4.5))
         plt.loglog(a, [law(x, DEM) for x in a], "k-", label="2-D DEM law (1.67a; 2.7a$^{2/3}$)")
         plt.loglog(a, [law(x, EXP) for x in a], "k--", label="experiments (1.2a; 1.9a$^{2/3}$)")
-        plt.loglog([r[0] for r in rows], [r[1] for r in rows], "o", color="C3", label="grainflow DEM")
+        plt.errorbar([r[0] for r in rows], [r[1] for r in rows], yerr=[r[2] for r in rows],
+                     fmt="o", color="C3", label="grainflow DEM (mean ± sd over packings)")
         plt.xlabel("aspect ratio a = H$_i$/L$_i$")
         plt.ylabel("run-out (L$_f$ - L$_i$)/L$_i$")
         plt.legend()

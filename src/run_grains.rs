@@ -93,6 +93,26 @@ pub struct GrainSummary {
     pub checks: Vec<CheckOutcome>,
 }
 
+/// Run-out (L_f − L_i)/L_i of the published 2-D DEM of disks at aspect ratio `a`:
+/// 1.67 a below a ≈ 2.7, 2.7 a^(2/3) above (../shared/reference/README.md).
+pub fn dem_law(a: f64) -> f64 {
+    if a < 2.7 {
+        1.67 * a
+    } else {
+        2.7 * a.powf(2.0 / 3.0)
+    }
+}
+
+/// Run-out of the experiments (Lajeunesse et al. 2005): 1.2 a below a ≈ 2.3,
+/// 1.9 a^(2/3) above.
+pub fn experiment_law(a: f64) -> f64 {
+    if a < 2.3 {
+        1.2 * a
+    } else {
+        1.9 * a.powf(2.0 / 3.0)
+    }
+}
+
 /// Every rank's owned grains, gathered on every rank and sorted by id (collective).
 pub fn gather_grains(sys: &DemSystem, comm: &dyn Comm) -> Grains {
     let mut local = Vec::with_capacity(sys.owned() * Grains::PACKED);
@@ -479,6 +499,14 @@ pub fn run_grains(
                     ("initial_length_m", li),
                     ("initial_height_m", hi),
                     ("stop_time", stopped / tau_c),
+                    (
+                        "dem_law_ratio",
+                        (after.length_m - li) / li / dem_law(hi / li),
+                    ),
+                    (
+                        "experiment_ratio",
+                        (after.length_m - li) / li / experiment_law(hi / li),
+                    ),
                 ] {
                     results.insert(format!("collapse.{k}"), v);
                 }

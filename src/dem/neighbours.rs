@@ -3,6 +3,7 @@
 
 use super::cells::CellList;
 use super::system::{DemSystem, HistoryMap};
+use super::walls::WallGrid;
 use rayon::prelude::*;
 
 impl DemSystem {
@@ -147,14 +148,26 @@ impl DemSystem {
         self.adj_start = start;
         self.adj = adj;
         self.candidates = candidates;
-        // Walls within r + skin of each owned grain.
+        // Walls within r + skin of each owned grain, from a grid of the walls over the
+        // owned grains' bounding box.
         let walls = &self.walls;
+        let fold = |v: &[f64]| {
+            v.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                })
+        };
+        let ((x0, x1), (y0, y1)) = (fold(&g.x[..owned]), fold(&g.y[..owned]));
+        let grid = (owned > 0)
+            .then(|| WallGrid::build(walls, [x0, y0], [x1, y1], rmax + skin, 4 * owned + 64));
         let near: Vec<Vec<u32>> = (0..owned)
             .into_par_iter()
             .with_min_len(1024)
             .map(|i| {
-                (0..walls.len() as u32)
-                    .filter(|&w| !walls[w as usize].removed)
+                let Some(grid) = &grid else { return Vec::new() };
+                grid.near([g.x[i], g.y[i]])
+                    .iter()
+                    .copied()
                     .filter(|&w| {
                         let c = walls[w as usize].closest_point([g.x[i], g.y[i]]);
                         let reach = g.r[i] + skin;

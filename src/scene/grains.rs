@@ -254,7 +254,9 @@ pub enum GrainAnalysis {
     /// Granular column collapse against a wall at x = `wall_x_m` (Lajeunesse et al. 2005):
     /// `collapse.runout` = (L_f − L_i)/L_i, `collapse.final_height` = H_f/L_i,
     /// `collapse.aspect_ratio` = H_i/L_i, `collapse.front_m`, `collapse.height_m`,
-    /// `collapse.stop_time` (t/τ_c with τ_c = √(H_i/g), when motion stopped).
+    /// `collapse.stop_time` (t/τ_c with τ_c = √(H_i/g), when motion stopped),
+    /// `collapse.dem_law_ratio` and `collapse.experiment_ratio` (run-out over the published
+    /// 2-D DEM law and over the experiments' law at the measured a).
     ColumnCollapse {
         /// The fixed wall behind the column (m).
         wall_x_m: f64,

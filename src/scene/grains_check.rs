@@ -34,6 +34,8 @@ pub fn grain_result_names(s: &GrainScene) -> Vec<String> {
                     "initial_length_m",
                     "initial_height_m",
                     "stop_time",
+                    "dem_law_ratio",
+                    "experiment_ratio",
                 ] {
                     names.push(format!("collapse.{q}"));
                 }
