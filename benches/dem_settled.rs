@@ -14,7 +14,7 @@ use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
 
-const BOX: [f64; 2] = [0.30, 0.33];
+const BOX: [f64; 2] = [0.32, 0.36];
 const CACHE: &str = "target/dem-settled-50k.csv";
 
 fn model() -> ContactModel {

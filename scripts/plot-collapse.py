@@ -74,7 +74,7 @@ def main():
         except ImportError:
             print("matplotlib not installed: no plot")
             return
-        a = [10 ** (k / 50) for k in range(-40, 101)]
+        a = [10 ** (k / 50) for k in range(-30, 66)]
         plt.figure(figsize=(6, 4.5))
         plt.loglog(a, [law(x, DEM) for x in a], "k-", label="2-D DEM law (1.67a; 2.7a$^{2/3}$)")
         plt.loglog(a, [law(x, EXP) for x in a], "k--", label="experiments (1.2a; 1.9a$^{2/3}$)")
