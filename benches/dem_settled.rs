@@ -24,6 +24,7 @@ fn model() -> ContactModel {
         restitution: 0.5,
         friction: 0.5,
         rolling_friction: 0.0,
+        tangential_damping: 0.0,
     }
 }
 

@@ -42,6 +42,7 @@ fn run(nx: usize, ny: usize, threads: usize, steps: usize) -> (f64, f64, usize) 
             restitution: 0.5,
             friction: 0.5,
             rolling_friction: 0.0,
+            tangential_damping: 0.0,
         };
         let dt = 1e-7;
         let mut s = DemSystem::new(g, walls, model, [0.0, 0.0], dt, 0.1, true).unwrap();

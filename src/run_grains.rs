@@ -47,7 +47,7 @@ pub struct GrainSummary {
     pub ranks: usize,
     /// Rayon threads per rank.
     pub threads: usize,
-    /// x-boundaries of the ranks' slabs (m).
+    /// x-boundaries of the ranks' slabs at the end (m).
     pub slab_bounds_m: Vec<f64>,
     /// Grains in the run.
     pub grains: usize,
@@ -75,6 +75,8 @@ pub struct GrainSummary {
     pub stages: BTreeMap<&'static str, StageStats>,
     /// Grains handed to another rank, all ranks together.
     pub migrated: u64,
+    /// Times the slab boundaries moved to rebalance the grain counts.
+    pub rebalances: u64,
     /// Seconds waiting for ghost and migration messages, slowest rank.
     pub comm_wait_s: f64,
     /// Contacts at the end.
@@ -571,6 +573,7 @@ pub fn run_grains(
         stage_seconds,
         stages,
         migrated: counts[0] as u64,
+        rebalances: d.rebalances,
         comm_wait_s: comm_wait,
         contacts: counts[1] as usize,
         list_rebuilds: d.system.list_rebuilds(),

@@ -71,6 +71,7 @@ fn settling_under_gravity_comes_to_rest() {
         restitution: 0.5,
         friction: 0.5,
         rolling_friction: 0.0,
+        tangential_damping: 0.0,
     };
     let dt = stable_time_step(&g, &model, 0.1);
     let mut s = DemSystem::new(g, walls, model, [0.0, -9.81], dt, 0.1, false).unwrap();

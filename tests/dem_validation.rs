@@ -17,6 +17,7 @@ fn model(e: f64, mu: f64) -> ContactModel {
         restitution: e,
         friction: mu,
         rolling_friction: 0.0,
+        tangential_damping: 0.0,
     }
 }
 

@@ -63,6 +63,9 @@ pub struct ContactModel {
     /// rotation (R* = r_i r_j / (r_i + r_j), r for a wall), never reversing it within a step
     /// (constant directional torque, Ai et al. 2011, model A). 0 switches it off.
     pub rolling_friction: f64,
+    /// Tangential dashpot as a fraction β of the normal one: c_t = β c_n (0 = none, the
+    /// default; LAMMPS's `gran/hooke/history` commonly uses γ_t = γ_n / 2).
+    pub tangential_damping: f64,
 }
 
 impl ContactModel {
@@ -83,6 +86,13 @@ impl ContactModel {
         }
         if !(self.rolling_friction >= 0.0) {
             return bad("rolling_friction", self.rolling_friction, "must be ≥ 0");
+        }
+        if !(0.0..=1.0).contains(&self.tangential_damping) {
+            return bad(
+                "tangential_damping",
+                self.tangential_damping,
+                "must be in [0, 1]",
+            );
         }
         Ok(())
     }
@@ -136,7 +146,7 @@ pub struct ContactForce {
 /// when approaching), tangential relative velocity `vt`, normal damping `cn` (from
 /// [`ContactModel::damping`]), friction `mu`, previous stretch `stretch`, over `dt` (s).
 /// Normal: F_n = k_n δ − c_n v_n (seed eq. 5.58 plus the dashpot); tangential: ξ += v_t Δt,
-/// F_t = −k_t ξ capped at μ|F_n| (Cundall & Strack 1979), the spring reset on sliding.
+/// F_t = −k_t ξ − c_t v_t capped at μ|F_n| (Cundall & Strack 1979), the spring reset on sliding.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn contact_force(
@@ -151,11 +161,19 @@ pub fn contact_force(
 ) -> ContactForce {
     let fn_ = model.kn * delta - cn * vn;
     let mut xi = stretch + vt * dt;
-    let mut ft = -model.kt * xi;
+    // Spring plus the optional tangential dashpot c_t = β c_n.
+    let ct = model.tangential_damping * cn;
+    let mut ft = -model.kt * xi - ct * vt;
     let limit = mu * fn_.abs();
     if ft.abs() > limit {
-        ft = -limit * xi.signum();
-        xi = if model.kt > 0.0 { -ft / model.kt } else { 0.0 };
+        // Sliding: the force sits on the Coulomb limit and the spring keeps the part of it
+        // the dashpot does not carry (Cundall & Strack 1979; as LAMMPS gran/hooke/history).
+        ft = limit * ft.signum();
+        xi = if model.kt > 0.0 {
+            -(ft + ct * vt) / model.kt
+        } else {
+            0.0
+        };
     }
     ContactForce {
         fn_,
@@ -177,6 +195,7 @@ mod tests {
                 restitution: e,
                 friction: 0.0,
                 rolling_friction: 0.0,
+                tangential_damping: 0.0,
             };
             let z = m.damping_ratio();
             let back = (-z * std::f64::consts::PI / (1.0 - z * z).sqrt()).exp();
@@ -192,10 +211,37 @@ mod tests {
             restitution: 1.0,
             friction: 0.5,
             rolling_friction: 0.0,
+            tangential_damping: 0.0,
         };
         let c = contact_force(&m, 1e-3, 0.0, 1.0, m.damping(1.0), 0.5, 0.0, 1e-3);
         assert!((c.fn_ - 10.0).abs() < 1e-12);
         assert!((c.ft + 5.0).abs() < 1e-12, "{}", c.ft);
         assert!((c.stretch - 5e-4).abs() < 1e-15);
+    }
+
+    /// The tangential dashpot adds −c_t v_t with c_t = β c_n; when sliding, the spring keeps
+    /// the part of the Coulomb force the dashpot does not carry.
+    #[test]
+    fn tangential_dashpot_adds_and_sliding_keeps_the_limit() {
+        let m = ContactModel {
+            kn: 1e4,
+            kt: 1e4,
+            restitution: 0.5,
+            friction: 0.5,
+            rolling_friction: 0.0,
+            tangential_damping: 0.5,
+        };
+        let cn = m.damping(1.0);
+        let ct = 0.5 * cn;
+        // Sticking: overlap 1e-3 (F_n = 10 N/m), small tangential slip.
+        let (vt, dt) = (1e-3, 1e-4);
+        let c = contact_force(&m, 1e-3, 0.0, vt, cn, 0.5, 0.0, dt);
+        let xi = vt * dt;
+        assert!((c.ft - (-m.kt * xi - ct * vt)).abs() < 1e-12, "{}", c.ft);
+        assert!((c.stretch - xi).abs() < 1e-18);
+        // Sliding: the total sits on μ F_n, spring + dashpot make it up.
+        let c = contact_force(&m, 1e-3, 0.0, 10.0, cn, 0.5, 0.0, 1e-3);
+        assert!((c.ft + 5.0).abs() < 1e-12, "{}", c.ft);
+        assert!((-m.kt * c.stretch - ct * 10.0 - c.ft).abs() < 1e-9);
     }
 }

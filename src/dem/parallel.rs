@@ -46,6 +46,13 @@ pub struct SlabDem {
     recv: [usize; 2],
     /// Grains this rank has sent away so far.
     pub migrated: u64,
+    /// Check the load balance every this many list rebuilds (0: never) and move the slab
+    /// boundaries when the most loaded rank holds over 10 % more grains than the mean.
+    pub rebalance_every: u64,
+    /// Times the slab boundaries moved.
+    pub rebalances: u64,
+    /// List rebuilds so far.
+    rebuilds: u64,
     /// Seconds waiting for messages (exposed communication).
     pub comm_seconds: f64,
     /// Reusable send/receive buffers of the per-step ghost update.
@@ -158,6 +165,9 @@ impl SlabDem {
             send: [Vec::new(), Vec::new()],
             recv: [0, 0],
             migrated: 0,
+            rebalance_every: 20,
+            rebalances: 0,
+            rebuilds: 0,
             comm_seconds: 0.0,
             bufs: Default::default(),
         })
@@ -245,7 +255,68 @@ impl SlabDem {
     fn rebuild(&mut self, comm: &dyn Comm, mut live: HistoryMap) {
         let sys = &mut self.system;
         sys.grains.truncate(sys.owned);
-        // 1. Leavers, one message per neighbour: [grains…] and [(id a, id b, stretch)…].
+        self.rebuilds += 1;
+        if self.rebalance_every > 0 && self.rebuilds % self.rebalance_every == 0 {
+            self.rebalance(comm);
+        }
+        // 1. Leavers, one message per neighbour per round; a grain moves one slab per
+        // round, so rounds repeat until no rank has leavers (one round unless the slabs
+        // were just rebalanced).
+        loop {
+            let leaving = self.migrate_round(comm, &mut live);
+            if !comm.any(leaving) {
+                break;
+            }
+        }
+        let sys = &mut self.system;
+        // 2. Ghosts: owned grains within the cutoff of a face go to that neighbour.
+        let g = &sys.grains;
+        let mut send = [Vec::new(), Vec::new()];
+        for i in 0..sys.owned {
+            if self.left.is_some() && g.x[i] < self.lo + self.cutoff {
+                send[0].push(i as u32);
+            }
+            if self.right.is_some() && g.x[i] >= self.hi - self.cutoff {
+                send[1].push(i as u32);
+            }
+        }
+        let msgs = send.clone().map(|list| {
+            let mut out = Vec::with_capacity(list.len() * Grains::PACKED);
+            for &i in &list {
+                g.pack(i as usize, &mut out);
+            }
+            join(&out, &[])
+        });
+        let got = self.exchange_varlen(comm, &msgs);
+        let sys = &mut self.system;
+        for (side, msg) in got.iter().enumerate() {
+            let (grains, _) = split(msg, Grains::PACKED);
+            for p in grains.chunks_exact(Grains::PACKED) {
+                sys.grains.push_packed(p);
+            }
+            self.recv[side] = grains.len() / Grains::PACKED;
+        }
+        // 3. The list; the spatial sort renumbers owned grains, so follow it.
+        let order = sys.rebuild_from(&live, self.skin, self.rmax);
+        if !order.is_empty() {
+            let mut new_of = vec![0u32; order.len()];
+            for (k, &o) in order.iter().enumerate() {
+                new_of[o as usize] = k as u32;
+            }
+            for list in &mut send {
+                for i in list.iter_mut() {
+                    *i = new_of[*i as usize];
+                }
+            }
+        }
+        self.send = send;
+    }
+
+    /// One migration round: grains outside this slab go to the neighbour on that side, with
+    /// their contact history. Returns whether this rank still holds grains outside its slab
+    /// afterwards (they arrived from two slabs away after a rebalance).
+    fn migrate_round(&mut self, comm: &dyn Comm, live: &mut HistoryMap) -> bool {
+        let sys = &mut self.system;
         let mut dest: HashMap<u64, usize> = HashMap::new();
         let mut grains_out = [Vec::new(), Vec::new()];
         let mut keep = vec![true; sys.owned];
@@ -303,47 +374,36 @@ impl SlabDem {
             }
         }
         sys.owned = sys.grains.len();
-        // 2. Ghosts: owned grains within the cutoff of a face go to that neighbour.
         let g = &sys.grains;
-        let mut send = [Vec::new(), Vec::new()];
-        for i in 0..sys.owned {
-            if self.left.is_some() && g.x[i] < self.lo + self.cutoff {
-                send[0].push(i as u32);
-            }
-            if self.right.is_some() && g.x[i] >= self.hi - self.cutoff {
-                send[1].push(i as u32);
-            }
+        (0..sys.owned).any(|i| {
+            (g.x[i] < self.lo && self.left.is_some()) || (g.x[i] >= self.hi && self.right.is_some())
+        })
+    }
+
+    /// New slab boundaries that balance the owned grain counts (quantiles of all centres,
+    /// each slab at least one cutoff wide), when the most loaded rank holds over 10 % more
+    /// than the mean. Collective; the grains then migrate in rounds.
+    fn rebalance(&mut self, comm: &dyn Comm) {
+        let counts = comm.all_gather_f64(&[self.system.owned as f64]);
+        let mean = counts.iter().sum::<f64>() / counts.len() as f64;
+        let max = counts.iter().cloned().fold(0.0, f64::max);
+        if counts.len() < 2 || max <= 1.1 * mean {
+            return;
         }
-        let msgs = send.clone().map(|list| {
-            let mut out = Vec::with_capacity(list.len() * Grains::PACKED);
-            for &i in &list {
-                g.pack(i as usize, &mut out);
-            }
-            join(&out, &[])
-        });
-        let got = self.exchange_varlen(comm, &msgs);
-        let sys = &mut self.system;
-        for (side, msg) in got.iter().enumerate() {
-            let (grains, _) = split(msg, Grains::PACKED);
-            for p in grains.chunks_exact(Grains::PACKED) {
-                sys.grains.push_packed(p);
-            }
-            self.recv[side] = grains.len() / Grains::PACKED;
-        }
-        // 3. The list; the spatial sort renumbers owned grains, so follow it.
-        let order = sys.rebuild_from(&live, self.skin, self.rmax);
-        if !order.is_empty() {
-            let mut new_of = vec![0u32; order.len()];
-            for (k, &o) in order.iter().enumerate() {
-                new_of[o as usize] = k as u32;
-            }
-            for list in &mut send {
-                for i in list.iter_mut() {
-                    *i = new_of[*i as usize];
-                }
-            }
-        }
-        self.send = send;
+        let x = comm.all_gather_f64(&self.system.grains.x[..self.system.owned]);
+        let last = self.bounds.len() - 1;
+        let bounds = balanced_bounds(
+            &x,
+            self.bounds[0],
+            self.bounds[last],
+            counts.len(),
+            self.cutoff,
+        );
+        let rank = comm.rank();
+        self.lo = bounds[rank];
+        self.hi = bounds[rank + 1];
+        self.bounds = bounds;
+        self.rebalances += 1;
     }
 
     /// Send `msgs[0]` to the left and `msgs[1]` to the right neighbour (where they exist)
@@ -466,6 +526,7 @@ mod tests {
             restitution: 0.5,
             friction: 0.5,
             rolling_friction: 0.05,
+            tangential_damping: 0.0,
         };
         let dt = crate::dem::stable_time_step(&g, &model, 0.1);
         let mut serial = DemSystem::new(

@@ -83,6 +83,10 @@ pub struct ContactSpec {
     /// Rolling-resistance coefficient μ_r (dimensionless); 0 = off.
     #[serde(default)]
     pub rolling_friction: f64,
+    /// Tangential dashpot as a fraction β of the normal one, c_t = β c_n, in [0, 1];
+    /// 0 (none) by default.
+    #[serde(default)]
+    pub tangential_damping: f64,
 }
 
 /// How the DEM time step is chosen.

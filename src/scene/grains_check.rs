@@ -108,6 +108,16 @@ fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
     }
     non_negative(ctx, "friction", c.friction)?;
     non_negative(ctx, "rolling_friction", c.rolling_friction)?;
+    if !(0.0..=1.0).contains(&c.tangential_damping) {
+        return Err(ctx.err(
+            "tangential_damping",
+            0,
+            format!(
+                "must be in [0, 1] (a fraction of the normal dashpot), got {}",
+                c.tangential_damping
+            ),
+        ));
+    }
     match g.time_step {
         TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => {
             if !(lambda > 0.0 && lambda <= 1.0) {
@@ -261,6 +271,7 @@ impl ValidGrainScene {
             restitution: c.restitution,
             friction: c.friction,
             rolling_friction: c.rolling_friction,
+            tangential_damping: c.tangential_damping,
         }
     }
 
