@@ -164,17 +164,7 @@ fn real_main() -> Result<i32> {
             for (k, v) in &summary.results {
                 println!("  {k} = {v:.6e}");
             }
-            for c in &summary.checks {
-                println!(
-                    "  check {}: {} = {} -> {}",
-                    if c.passed { "PASS" } else { "FAIL" },
-                    c.quantity,
-                    c.value
-                        .map(|v| format!("{v:.6e}"))
-                        .unwrap_or_else(|| "missing".into()),
-                    describe_bounds(c)
-                );
-            }
+            print_checks(&summary.checks);
             println!(
                 "output: {}  (summary.json, fields.h5 + fields.xdmf, pictures/, probe_*.csv)",
                 out.display()
@@ -266,17 +256,7 @@ fn run_grain_scene(
     for (k, v) in &summary.results {
         println!("  {k} = {v:.6e}");
     }
-    for c in &summary.checks {
-        println!(
-            "  check {}: {} = {} -> {}",
-            if c.passed { "PASS" } else { "FAIL" },
-            c.quantity,
-            c.value
-                .map(|v| format!("{v:.6e}"))
-                .unwrap_or_else(|| "missing".into()),
-            describe_bounds(c)
-        );
-    }
+    print_checks(&summary.checks);
     println!(
         "output: {}  (summary.json, grains.h5 + grains.xdmf, pictures/)",
         out.display()
@@ -294,6 +274,21 @@ fn run_grain_scene(
         _ => {}
     }
     Ok(exit_code(summary.status))
+}
+
+/// One line per check: PASS/FAIL, the quantity, its value and the bounds.
+fn print_checks(checks: &[grainflow::analysis::checks::CheckOutcome]) {
+    for c in checks {
+        println!(
+            "  check {}: {} = {} -> {}",
+            if c.passed { "PASS" } else { "FAIL" },
+            c.quantity,
+            c.value
+                .map(|v| format!("{v:.6e}"))
+                .unwrap_or_else(|| "missing".into()),
+            describe_bounds(c)
+        );
+    }
 }
 
 /// Exit status: 0 ok, 2 a check failed, 3 unstable, 4 stopped by SIGTERM (checkpoint written).

@@ -7,7 +7,6 @@
 mod common;
 use common::root;
 use std::path::Path;
-use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_grainflow");
 const SCENE: &str = "tests/scenes/grains_collapse.toml";
@@ -17,16 +16,7 @@ fn run(ranks: usize, out: &Path) {
 }
 
 fn run_scene(ranks: usize, scene: &Path, out: &Path, extra: &[&str]) {
-    let mut cmd = if ranks == 1 {
-        Command::new(BIN)
-    } else {
-        let mut c = Command::new("mpirun");
-        c.args(["--oversubscribe", "--bind-to", "none", "-np"])
-            .arg(ranks.to_string())
-            .arg(BIN);
-        c
-    };
-    let o = cmd
+    let o = common::on_ranks(ranks, BIN)
         .args([
             "run",
             scene.to_str().unwrap(),
@@ -35,9 +25,6 @@ fn run_scene(ranks: usize, scene: &Path, out: &Path, extra: &[&str]) {
         ])
         .args(["--quiet", "--threads", "1"])
         .args(extra)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .current_dir(root())
         .output()
         .expect("grainflow or mpirun starts");
     eprintln!("{}", String::from_utf8_lossy(&o.stderr));

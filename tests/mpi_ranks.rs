@@ -11,21 +11,9 @@ const BIN: &str = env!("CARGO_BIN_EXE_grainflow");
 
 /// Run `grainflow ARGS` on `ranks` ranks: directly for 1, under mpirun otherwise.
 fn grainflow(ranks: usize, args: &[&str]) -> Output {
-    let mut cmd = if ranks == 1 {
-        Command::new(BIN)
-    } else {
-        let mut c = Command::new("mpirun");
-        c.args(["--oversubscribe", "--bind-to", "none", "-np"])
-            .arg(ranks.to_string())
-            .arg(BIN);
-        c
-    };
-    cmd.args(args)
+    let o = common::on_ranks(ranks, BIN)
+        .args(args)
         .args(["--quiet", "--threads", "1"])
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .current_dir(root());
-    let o = cmd
         .output()
         .expect("grainflow or mpirun starts (scripts/setup.sh installs Open MPI)");
     eprintln!("$ {ranks} rank(s): grainflow {}", args.join(" "));

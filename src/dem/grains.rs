@@ -73,7 +73,12 @@ impl Grains {
 
     /// Kinetic energy, translational plus rotational (J/m).
     pub fn kinetic_energy(&self) -> f64 {
-        (0..self.len())
+        self.kinetic_energy_of(self.len())
+    }
+
+    /// Kinetic energy of the first `n` grains (J/m).
+    pub fn kinetic_energy_of(&self, n: usize) -> f64 {
+        (0..n)
             .map(|i| {
                 let rot = if self.inv_inertia[i] > 0.0 {
                     0.5 * self.omega[i] * self.omega[i] / self.inv_inertia[i]
@@ -141,26 +146,14 @@ impl Grains {
 
     /// Append a grain packed by [`Grains::pack`], forces zero.
     pub fn push_packed(&mut self, p: &[f64]) {
-        let reals = [
-            &mut self.x,
-            &mut self.y,
-            &mut self.vx,
-            &mut self.vy,
-            &mut self.theta,
-            &mut self.omega,
-            &mut self.r,
-            &mut self.m,
-            &mut self.inv_inertia,
-        ];
-        for (v, &value) in reals.into_iter().zip(p) {
-            v.push(value);
+        // reals_mut: the 9 packed values in order, then the three forces.
+        for (k, v) in self.reals_mut().into_iter().enumerate() {
+            v.push(if k < Self::PACKED - 1 { p[k] } else { 0.0 });
         }
-        self.fx.push(0.0);
-        self.fy.push(0.0);
-        self.torque.push(0.0);
         self.id.push(p[9].to_bits());
     }
 
+    /// Every f64 array: the packed ones in [`Grains::pack`] order, then fx, fy, torque.
     fn reals_mut(&mut self) -> [&mut Vec<f64>; 12] {
         [
             &mut self.x,

@@ -215,27 +215,14 @@ impl SlabDem {
         }
         in_l.resize(self.recv[0] * FORWARD, 0.0);
         in_r.resize(self.recv[1] * FORWARD, 0.0);
-        let peers = [self.left, self.right];
-        let mut sends = Vec::new();
-        let mut recvs = Vec::new();
-        for (side, (out, inc)) in [(&*out_l, &mut *in_l), (&*out_r, &mut *in_r)]
-            .into_iter()
-            .enumerate()
-        {
-            if let Some(p) = peers[side] {
-                sends.push(Outgoing {
-                    peer: p,
-                    tag: TAG_FORWARD + side as u16,
-                    data: bytemuck::cast_slice(out),
-                });
-                recvs.push(Incoming {
-                    peer: p,
-                    tag: TAG_FORWARD + 1 - side as u16,
-                    data: bytemuck::cast_slice_mut(inc.as_mut_slice()),
-                });
-            }
-        }
-        self.comm_seconds += comm.exchange(&sends, &mut recvs, &mut || {});
+        let wait = swap(
+            comm,
+            [self.left, self.right],
+            TAG_FORWARD,
+            [out_l.as_slice(), out_r.as_slice()],
+            [in_l.as_mut_slice(), in_r.as_mut_slice()],
+        );
+        self.comm_seconds += wait;
         let g = &mut self.system.grains;
         let mut at = self.system.owned;
         for inc in [&*in_l, &*in_r] {
@@ -409,48 +396,56 @@ impl SlabDem {
     /// Send `msgs[0]` to the left and `msgs[1]` to the right neighbour (where they exist)
     /// and receive theirs: sizes first, then the payloads. Returns [from left, from right].
     fn exchange_varlen(&mut self, comm: &dyn Comm, msgs: &[Vec<f64>; 2]) -> [Vec<f64>; 2] {
-        let peers = [self.left, self.right];
         let lens = msgs.clone().map(|m| [m.len() as u64]);
         let mut got_lens = [[0u64], [0u64]];
-        {
-            let mut sends = Vec::new();
-            let mut recvs = Vec::new();
-            for (side, inc) in got_lens.iter_mut().enumerate() {
-                if let Some(p) = peers[side] {
-                    sends.push(Outgoing {
-                        peer: p,
-                        tag: TAG_COUNT + side as u16,
-                        data: bytemuck::cast_slice(&lens[side]),
-                    });
-                    recvs.push(Incoming {
-                        peer: p,
-                        tag: TAG_COUNT + 1 - side as u16,
-                        data: bytemuck::cast_slice_mut(inc.as_mut_slice()),
-                    });
-                }
-            }
-            self.comm_seconds += comm.exchange(&sends, &mut recvs, &mut || {});
-        }
+        let [l0, l1] = &mut got_lens;
+        self.comm_seconds += swap(
+            comm,
+            [self.left, self.right],
+            TAG_COUNT,
+            [&lens[0], &lens[1]],
+            [l0, l1],
+        );
         let mut got = got_lens.map(|[n]| vec![0.0f64; n as usize]);
-        let mut sends = Vec::new();
-        let mut recvs = Vec::new();
-        for (side, inc) in got.iter_mut().enumerate() {
-            if let Some(p) = peers[side] {
-                sends.push(Outgoing {
-                    peer: p,
-                    tag: TAG_DATA + side as u16,
-                    data: bytemuck::cast_slice(&msgs[side]),
-                });
-                recvs.push(Incoming {
-                    peer: p,
-                    tag: TAG_DATA + 1 - side as u16,
-                    data: bytemuck::cast_slice_mut(inc.as_mut_slice()),
-                });
-            }
-        }
-        self.comm_seconds += comm.exchange(&sends, &mut recvs, &mut || {});
+        let [g0, g1] = &mut got;
+        self.comm_seconds += swap(
+            comm,
+            [self.left, self.right],
+            TAG_DATA,
+            [&msgs[0], &msgs[1]],
+            [g0, g1],
+        );
         got
     }
+}
+
+/// One exchange round with both neighbours: `out[side]` goes to that neighbour (tag
+/// `tag + side`), `into[side]` is filled from it (its buffer's length is the expected
+/// size). Sides without a neighbour are skipped. Returns the seconds spent waiting.
+fn swap<T: bytemuck::Pod>(
+    comm: &dyn Comm,
+    peers: [Option<usize>; 2],
+    tag: u16,
+    out: [&[T]; 2],
+    into: [&mut [T]; 2],
+) -> f64 {
+    let mut sends = Vec::new();
+    let mut recvs = Vec::new();
+    for (side, inc) in into.into_iter().enumerate() {
+        if let Some(p) = peers[side] {
+            sends.push(Outgoing {
+                peer: p,
+                tag: tag + side as u16,
+                data: bytemuck::cast_slice(out[side]),
+            });
+            recvs.push(Incoming {
+                peer: p,
+                tag: tag + 1 - side as u16,
+                data: bytemuck::cast_slice_mut(inc),
+            });
+        }
+    }
+    comm.exchange(&sends, &mut recvs, &mut || {})
 }
 
 /// The rank of `bounds` whose range holds `x` (the outer ranks take everything beyond).

@@ -312,17 +312,7 @@ impl DemSystem {
 
     /// Kinetic energy of the owned grains (J/m).
     pub fn owned_kinetic_energy(&self) -> f64 {
-        let g = &self.grains;
-        (0..self.owned)
-            .map(|i| {
-                let rot = if g.inv_inertia[i] > 0.0 {
-                    0.5 * g.omega[i] * g.omega[i] / g.inv_inertia[i]
-                } else {
-                    0.0
-                };
-                0.5 * g.m[i] * (g.vx[i] * g.vx[i] + g.vy[i] * g.vy[i]) + rot
-            })
-            .sum()
+        self.grains.kinetic_energy_of(self.owned)
     }
 
     /// Verlet-list rebuilds so far.

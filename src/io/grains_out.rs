@@ -263,17 +263,5 @@ pub fn write_grains_png(
             put(x as isize, y as isize, [0, 0, 0]);
         }
     }
-    let mut bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut bytes, width as u32, height as u32);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let err = |e: png::EncodingError| OutputError::Png {
-            path: path.to_owned(),
-            message: e.to_string(),
-        };
-        let mut wr = enc.write_header().map_err(err)?;
-        wr.write_image_data(&rgb).map_err(err)?;
-    }
-    write_atomic(path, &bytes)
+    super::picture::write_rgb_png(path, width, height, &rgb)
 }

@@ -41,6 +41,11 @@ pub fn write_field_png(
             rgb[(py * w + px) * 3..][..3].copy_from_slice(&c);
         }
     }
+    write_rgb_png(path, w, h, &rgb)
+}
+
+/// Encode `rgb` (8-bit RGB, `w` × `h`, rows from the top) as a PNG written atomically.
+pub fn write_rgb_png(path: &Path, w: usize, h: usize, rgb: &[u8]) -> Result<(), OutputError> {
     let mut bytes = Vec::new();
     {
         let mut enc = png::Encoder::new(&mut bytes, w as u32, h as u32);
@@ -51,7 +56,7 @@ pub fn write_field_png(
             message: e.to_string(),
         };
         let mut wr = enc.write_header().map_err(err)?;
-        wr.write_image_data(&rgb).map_err(err)?;
+        wr.write_image_data(rgb).map_err(err)?;
     }
     write_atomic(path, &bytes)
 }

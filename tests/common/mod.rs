@@ -88,3 +88,22 @@ pub fn scene_variant(rel: &str, replacements: &[(&str, &str)]) -> String {
     }
     text
 }
+
+/// A command running `bin` on `ranks` ranks: directly for 1, under `mpirun` otherwise
+/// (oversubscribed and unbound so rayon keeps its threads; allowed as root for CI
+/// containers), from the repository root.
+pub fn on_ranks(ranks: usize, bin: &str) -> std::process::Command {
+    let mut cmd = if ranks == 1 {
+        std::process::Command::new(bin)
+    } else {
+        let mut c = std::process::Command::new("mpirun");
+        c.args(["--oversubscribe", "--bind-to", "none", "-np"])
+            .arg(ranks.to_string())
+            .arg(bin);
+        c
+    };
+    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .current_dir(root());
+    cmd
+}
