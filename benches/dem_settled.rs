@@ -135,8 +135,9 @@ fn main() {
             )
         });
         println!(
-            "  {threads} thread(s): {:.2} M grain-steps/s ({per_grain:.2} contacts per grain, {rebuilds} list rebuilds)",
-            rate / 1e6
+            "  {threads} thread(s): {:.2} M grain-steps/s, {:.2} M contacts/s ({per_grain:.2} contacts per grain, {rebuilds} list rebuilds)",
+            rate / 1e6,
+            rate * per_grain / 1e6
         );
     }
 }
