@@ -129,7 +129,8 @@ fn grains_on_1_2_and_4_ranks_match_and_none_is_lost() {
 }
 
 /// A checkpoint written on 2 ranks (grains with their last forces, contact history, walls,
-/// counters) and restarted on 4 ranks ends bit-identical to an uninterrupted 1-rank run.
+/// counters) and restarted on 4 ranks ends bit-identical to an uninterrupted 1-rank run;
+/// restarted in its own folder on 3 ranks, the whole snapshot file matches.
 #[test]
 fn grains_checkpoint_restarts_on_another_rank_count_bit_identically() {
     let tmp = tempfile::tempdir().unwrap();
@@ -159,4 +160,19 @@ fn grains_checkpoint_restarts_on_another_rank_count_bit_identically() {
     }
     // The analyses see the same initial column.
     assert_eq!(summary(&one)["results"], s["results"]);
+    // Restarting in the run's own folder keeps the snapshots up to the checkpoint and
+    // rewrites the later ones: the file then matches the uninterrupted run's, every group.
+    run_scene(3, &scene, &first, &["--restart", ckpt.to_str().unwrap()]);
+    let (a, c) = (snapshots(&one), snapshots(&first));
+    assert_eq!(
+        a.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        c.iter().map(|x| &x.0).collect::<Vec<_>>()
+    );
+    for ((g, ids, sets), (_, ids_c, sets_c)) in a.iter().zip(&c) {
+        assert_eq!(ids, ids_c, "{g}");
+        for ((name, v), (_, w)) in sets.iter().zip(sets_c) {
+            let same = v.iter().zip(w).all(|(x, y)| x.to_bits() == y.to_bits());
+            assert!(same, "{g}/{name} differs after restarting in place");
+        }
+    }
 }

@@ -35,20 +35,60 @@ const DATASETS: [(&str, usize, &str); 6] = [
 ];
 
 impl GrainWriter {
-    /// Create `dir/grains.h5` on every rank of `comm`. Collective.
-    pub fn create(dir: &Path, comm: &dyn Comm) -> Result<Self, OutputError> {
+    /// Open `dir/grains.h5` on every rank of `comm`. Collective.
+    ///
+    /// With `resume_after = None` the file is created (truncating an old one). With
+    /// `Some(step)` (a restart) an existing file is kept: its snapshots up to `step` stay and
+    /// later ones (written after the checkpoint by the run being redone) are removed.
+    pub fn open(
+        dir: &Path,
+        comm: &dyn Comm,
+        resume_after: Option<u64>,
+    ) -> Result<Self, OutputError> {
         let path = dir.join("grains.h5");
-        let (file, access) = h5par::create(&path, comm).map_err(|source| OutputError::Hdf5 {
+        let h5 = |source| OutputError::Hdf5 {
             path: path.clone(),
             source,
-        })?;
-        Ok(Self {
-            path,
+        };
+        let resume = resume_after.filter(|_| path.exists());
+        let (file, access) = match resume {
+            Some(_) => h5par::open(&path, comm, true).map_err(h5)?,
+            None => h5par::create(&path, comm).map_err(h5)?,
+        };
+        let mut w = Self {
+            path: path.clone(),
             file,
             access,
             root: comm.is_root(),
             written: Vec::new(),
-        })
+        };
+        if let Some(last) = resume {
+            let mut names = w.file.member_names().map_err(h5)?;
+            names.sort();
+            for group in names {
+                let Some(step) = group
+                    .strip_prefix("step_")
+                    .and_then(|s| s.parse::<u64>().ok())
+                else {
+                    continue;
+                };
+                if step > last {
+                    w.file.unlink(&group).map_err(h5)?;
+                    continue;
+                }
+                let g = w.file.group(&group).map_err(h5)?;
+                let time = g
+                    .attr("time_s")
+                    .and_then(|a| a.read_scalar::<f64>())
+                    .map_err(h5)?;
+                let n = g.dataset("id").map_err(h5)?.shape()[0] as u64;
+                w.written.push((group, time, n));
+            }
+            if w.root {
+                w.write_xdmf()?;
+            }
+        }
+        Ok(w)
     }
 
     /// Write group `/step_NNNNNNNN` with every owned grain of every rank: position and
