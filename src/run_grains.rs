@@ -3,25 +3,26 @@
 //! ghost exchange inside), output — and the analyses, checks and `summary.json`.
 
 use crate::analysis::checks::{evaluate, CheckOutcome};
-use crate::analysis::collapse::pile_shape;
+use crate::analysis::collapse::{collapse_results, pile_shape, QUANTITIES};
 use crate::analysis::Results;
-use crate::dem::parallel::balanced_bounds;
-use crate::dem::sample::{load_csv, random_sequential_addition};
-use crate::dem::{stable_time_step, DemError, DemSystem, Grains, SlabDem};
+use crate::dem::{Grains, SlabDem};
 use crate::io::atomic::{ensure_writable_dir, write_atomic};
 use crate::io::grains_checkpoint::{self, apply_walls, GrainRunState};
 use crate::io::grains_out::{write_grains_png, GrainWriter};
 use crate::progress::Progress;
 use crate::run::{RunError, RunOptions, StageStats, Status};
-use crate::scene::{
-    size_distribution, GrainAnalysis, GrainScene, SampleSpec, TimeStepSpec, ValidGrainScene,
-};
+use crate::scene::{GrainAnalysis, GrainScene, ValidGrainScene};
 use decomposition::Comm;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
+
+mod sample;
+
+pub use sample::gather_grains;
+use sample::{bounds_for, global_state, prepare, start};
 
 /// Stages of a grains step, in order.
 pub const GRAIN_STAGES: [&str; 3] = ["walls", "dem", "output"];
@@ -95,186 +96,6 @@ pub struct GrainSummary {
     pub checks: Vec<CheckOutcome>,
 }
 
-/// Run-out (L_f − L_i)/L_i of the published 2-D DEM of disks at aspect ratio `a`:
-/// 1.67 a below a ≈ 2.7, 2.7 a^(2/3) above (../shared/reference/README.md).
-pub fn dem_law(a: f64) -> f64 {
-    if a < 2.7 {
-        1.67 * a
-    } else {
-        2.7 * a.powf(2.0 / 3.0)
-    }
-}
-
-/// Run-out of the experiments (Lajeunesse et al. 2005): 1.2 a below a ≈ 2.3,
-/// 1.9 a^(2/3) above.
-pub fn experiment_law(a: f64) -> f64 {
-    if a < 2.3 {
-        1.2 * a
-    } else {
-        1.9 * a.powf(2.0 / 3.0)
-    }
-}
-
-/// Every rank's owned grains, gathered on every rank and sorted by id (collective).
-pub fn gather_grains(sys: &DemSystem, comm: &dyn Comm) -> Grains {
-    let mut local = Vec::with_capacity(sys.owned() * Grains::PACKED);
-    for i in 0..sys.owned() {
-        sys.grains.pack(i, &mut local);
-    }
-    let all = comm.all_gather_f64(&local);
-    let mut rows: Vec<&[f64]> = all.chunks_exact(Grains::PACKED).collect();
-    rows.sort_by_key(|p| p[9].to_bits());
-    let mut g = Grains::default();
-    for p in rows {
-        g.push_packed(p);
-    }
-    g
-}
-
-/// Global sums of kinetic energy, momentum and grain count (collective).
-fn global_state(d: &SlabDem, comm: &dyn Comm) -> (f64, [f64; 2], f64) {
-    let p = d.system.grains.momentum_of(d.system.owned());
-    let mut v = [
-        d.system.owned_kinetic_energy(),
-        p[0],
-        p[1],
-        d.system.owned() as f64,
-    ];
-    comm.sum_f64(&mut v);
-    (v[0], [v[1], v[2]], v[3])
-}
-
-/// Prepare the sample of `scene` (identical on every rank; settling runs distributed).
-/// Returns the grains (ids 0..N) and the settling steps.
-fn prepare(
-    scene: &ValidGrainScene,
-    dt_of: &dyn Fn(&Grains) -> f64,
-    comm: &dyn Comm,
-) -> Result<(Grains, u64), RunError> {
-    let s = &scene.scene;
-    let rho = s.grains.density_kg_m3;
-    let (grains, settle) = match &s.grains.sample {
-        SampleSpec::Csv { file } => (load_csv(&scene.base_dir.join(file), rho)?, None),
-        SampleSpec::Pack {
-            min_m,
-            max_m,
-            sizes,
-            solid_fraction,
-            seed,
-            settle,
-        } => (
-            random_sequential_addition(
-                *min_m,
-                *max_m,
-                size_distribution(sizes),
-                rho,
-                *solid_fraction,
-                *seed,
-                20_000,
-            ),
-            settle.clone(),
-        ),
-    };
-    if grains.is_empty() {
-        return Err(DemError::Parameter {
-            name: "sample",
-            value: 0.0,
-            why: "the sample holds no grains: enlarge the packing rectangle or check the CSV",
-        }
-        .into());
-    }
-    let Some(st) = settle else {
-        return Ok((grains, 0));
-    };
-    let mut d = start(scene, grains, dt_of, true, comm)?;
-    d.system.global_damping = st.damping_1_s;
-    let mut steps = 0;
-    let n = d.global_count(comm) as f64;
-    loop {
-        for _ in 0..100 {
-            d.step(comm);
-        }
-        steps += 100;
-        let (ke, _, _) = global_state(&d, comm);
-        if ke / n < st.kinetic_energy_per_grain_j_m {
-            break;
-        }
-        if steps >= st.max_steps {
-            return Err(DemError::Parameter {
-                name: "max_steps",
-                value: st.max_steps as f64,
-                why: "settling did not bring the kinetic energy per grain below \
-                      kinetic_energy_per_grain_j_m: raise max_steps or damping_1_s",
-            }
-            .into());
-        }
-    }
-    let settled = gather_grains(&d.system, comm);
-    // Keep the grains below the trim height, at rest, renumbered 0..N.
-    let mut g = Grains::default();
-    for i in 0..settled.len() {
-        if st.trim_above_m.is_some_and(|h| settled.y[i] > h) {
-            continue;
-        }
-        let mut p = Vec::with_capacity(Grains::PACKED);
-        settled.pack(i, &mut p);
-        p[2] = 0.0;
-        p[3] = 0.0;
-        p[5] = 0.0;
-        p[9] = f64::from_bits(g.len() as u64);
-        g.push_packed(&p);
-    }
-    Ok((g, steps))
-}
-
-/// Slab boundaries for `grains` over the ranks of `comm`, balanced by grain count.
-fn bounds_for(scene: &ValidGrainScene, grains: &Grains, comm: &dyn Comm) -> Vec<f64> {
-    let s = &scene.scene;
-    let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
-    let cutoff = 2.0 * rmax + DemSystem::skin_for(rmax);
-    balanced_bounds(
-        &grains.x,
-        s.region.min_m[0],
-        s.region.max_m[0],
-        comm.size(),
-        cutoff,
-    )
-}
-
-/// λ of the scene's time-step choice.
-fn lambda_of(scene: &ValidGrainScene) -> f64 {
-    match scene.scene.grains.time_step {
-        TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => lambda,
-    }
-}
-
-/// A distributed system of `grains` with the scene's walls and contacts.
-fn start(
-    scene: &ValidGrainScene,
-    grains: Grains,
-    dt_of: &dyn Fn(&Grains) -> f64,
-    allow_overlap: bool,
-    comm: &dyn Comm,
-) -> Result<SlabDem, RunError> {
-    let s = &scene.scene;
-    let bounds = bounds_for(scene, &grains, comm);
-    let lambda = lambda_of(scene);
-    let dt = dt_of(&grains);
-    let mut d = SlabDem::new(
-        grains,
-        &bounds,
-        scene.walls(),
-        scene.contact_model(),
-        s.grains.gravity_m_s2,
-        dt,
-        lambda,
-        allow_overlap,
-        comm,
-    )?;
-    d.system.global_damping = s.grains.global_damping_1_s;
-    Ok(d)
-}
-
 /// Run a grains scene on every rank of `comm` (collective). Writes `grains.h5` +
 /// `grains.xdmf`, `pictures/grains_*.png` and (rank 0) `summary.json` into `opts.out_dir`.
 pub fn run_grains(
@@ -288,45 +109,24 @@ pub fn run_grains(
         ensure_writable_dir(&opts.out_dir.join("pictures"))?;
     }
     comm.barrier();
-    let model = scene.contact_model();
-    let (lambda, fixed) = match s.grains.time_step {
-        TimeStepSpec::Critical { lambda } => (lambda, None),
-        TimeStepSpec::Fixed {
-            time_step_s,
-            lambda,
-        } => (lambda, Some(time_step_s)),
-    };
-    let dt_of = move |g: &Grains| fixed.unwrap_or_else(|| stable_time_step(g, &model, lambda));
     let restored = match &opts.restart {
         Some(p) => Some(grains_checkpoint::read(p, comm, s.grains.walls.len())?),
         None => None,
     };
     let (mut d, settle_steps, initial, resume) = match restored {
         None => {
-            let (grains, settle_steps) = prepare(scene, &dt_of, comm)?;
+            let (grains, settle_steps) = prepare(scene, comm)?;
             let allow = s.grains.allow_overlap || settle_steps > 0;
-            let d = start(scene, grains, &dt_of, allow, comm)?;
+            let d = start(scene, grains, allow, comm)?;
             let initial = gather_grains(&d.system, comm);
             (d, settle_steps, initial, None)
         }
         Some(r) => {
-            let mut walls = scene.walls();
-            apply_walls(&mut walls, &r.walls);
             let bounds = bounds_for(scene, &r.grains, comm);
-            let dt = dt_of(&r.grains);
-            let mut d = SlabDem::restore(
-                r.grains,
-                r.history,
-                &bounds,
-                walls,
-                model,
-                s.grains.gravity_m_s2,
-                dt,
-                lambda,
-                r.run.time_s,
-                r.run.step,
-                comm,
-            )?;
+            let mut setup = scene.dem_setup(&r.grains);
+            apply_walls(&mut setup.walls, &r.walls);
+            let clock = (r.run.time_s, r.run.step);
+            let mut d = SlabDem::restore(r.grains, r.history, &bounds, setup, clock, comm)?;
             d.system.global_damping = s.grains.global_damping_1_s;
             if comm.is_root() {
                 d.migrated = r.run.migrated;
@@ -489,27 +289,9 @@ pub fn run_grains(
             } => {
                 let before = pile_shape(&initial.x, &initial.y, &initial.r, *wall_x_m, *floor_y_m);
                 let after = pile_shape(&fin.x, &fin.y, &fin.r, *wall_x_m, *floor_y_m);
-                let (li, hi) = (before.length_m, before.height_m);
-                let tau_c = (hi / g_abs).sqrt();
-                let stopped = stop_time.unwrap_or(d.system.time) - last_removal;
-                for (k, v) in [
-                    ("runout", (after.length_m - li) / li),
-                    ("final_height", after.height_m / li),
-                    ("aspect_ratio", hi / li),
-                    ("front_m", after.length_m),
-                    ("height_m", after.height_m),
-                    ("initial_length_m", li),
-                    ("initial_height_m", hi),
-                    ("stop_time", stopped / tau_c),
-                    (
-                        "dem_law_ratio",
-                        (after.length_m - li) / li / dem_law(hi / li),
-                    ),
-                    (
-                        "experiment_ratio",
-                        (after.length_m - li) / li / experiment_law(hi / li),
-                    ),
-                ] {
+                let flow_time = stop_time.unwrap_or(d.system.time) - last_removal;
+                let values = collapse_results(before, after, g_abs, flow_time);
+                for (k, v) in QUANTITIES.iter().zip(values) {
                     results.insert(format!("collapse.{k}"), v);
                 }
             }
@@ -562,7 +344,7 @@ pub fn run_grains(
         slab_bounds_m: d.bounds().to_vec(),
         grains: n_total,
         time_step_s: dt,
-        lambda,
+        lambda: scene.lambda(),
         settle_steps,
         restarted_from_step: start_step,
         checkpoints,

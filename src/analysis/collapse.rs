@@ -67,6 +67,68 @@ pub fn pile_shape(x: &[f64], y: &[f64], r: &[f64], wall_x: f64, floor_y: f64) ->
     }
 }
 
+/// Run-out (L_f − L_i)/L_i of the published 2-D DEM of disks at aspect ratio `a`:
+/// 1.67 a below a ≈ 2.7, 2.7 a^(2/3) above (../shared/reference/README.md).
+pub fn dem_law(a: f64) -> f64 {
+    if a < 2.7 {
+        1.67 * a
+    } else {
+        2.7 * a.powf(2.0 / 3.0)
+    }
+}
+
+/// Run-out of the experiments (Lajeunesse et al. 2005): 1.2 a below a ≈ 2.3,
+/// 1.9 a^(2/3) above.
+pub fn experiment_law(a: f64) -> f64 {
+    if a < 2.3 {
+        1.2 * a
+    } else {
+        1.9 * a.powf(2.0 / 3.0)
+    }
+}
+
+/// Names of the column-collapse results (prefixed `collapse.` in a run), in the order of
+/// [`collapse_results`].
+pub const QUANTITIES: [&str; 10] = [
+    "runout",
+    "final_height",
+    "aspect_ratio",
+    "front_m",
+    "height_m",
+    "initial_length_m",
+    "initial_height_m",
+    "stop_time",
+    "dem_law_ratio",
+    "experiment_ratio",
+];
+
+/// The collapse results, in the order of [`QUANTITIES`], from the column `before` and the
+/// deposit `after`, gravity `g` (m/s²) and the time the flow took (s):
+/// run-out (L_f − L_i)/L_i, H_f/L_i, a = H_i/L_i, L_f, H_f, L_i, H_i, the flow time in
+/// units of τ_c = √(H_i/g), and the run-out over the 2-D DEM law and over the experiments'.
+pub fn collapse_results(
+    before: PileShape,
+    after: PileShape,
+    g: f64,
+    flow_time_s: f64,
+) -> [f64; 10] {
+    let (li, hi) = (before.length_m, before.height_m);
+    let a = hi / li;
+    let runout = (after.length_m - li) / li;
+    [
+        runout,
+        after.height_m / li,
+        a,
+        after.length_m,
+        after.height_m,
+        li,
+        hi,
+        flow_time_s / (hi / g).sqrt(),
+        runout / dem_law(a),
+        runout / experiment_law(a),
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,5 +148,27 @@ mod tests {
         let s = pile_shape(&x, &y, &rr, 0.0, 0.0);
         assert!((s.length_m - 10.0).abs() < 1e-12, "{s:?}");
         assert!((s.height_m - 2.0).abs() < 1e-12, "{s:?}");
+    }
+
+    /// A column 1 wide, 2 high spreading to 4: run-out 3, a = 2, on the DEM law's linear
+    /// branch (1.67 a) and above the experiments' transition a = 2.3 only at a = 3.
+    #[test]
+    fn collapse_results_and_laws() {
+        let before = PileShape {
+            length_m: 1.0,
+            height_m: 2.0,
+        };
+        let after = PileShape {
+            length_m: 4.0,
+            height_m: 0.5,
+        };
+        let r = collapse_results(before, after, 8.0, 1.0);
+        assert_eq!(r[0], 3.0);
+        assert_eq!(r[2], 2.0);
+        assert_eq!(r[7], 2.0, "t / sqrt(H/g) = 1 / 0.5");
+        assert!((r[8] - 3.0 / 3.34).abs() < 1e-12);
+        assert!((r[9] - 3.0 / 2.4).abs() < 1e-12);
+        assert!((dem_law(8.0) - 2.7 * 4.0).abs() < 1e-12);
+        assert!((experiment_law(8.0) - 1.9 * 4.0).abs() < 1e-12);
     }
 }

@@ -167,31 +167,29 @@ impl DemSystem {
     fn wall_contact(&self, i: usize, w: usize, zeta: f64) -> Option<WallHit> {
         let g = &self.grains;
         let wall = &self.walls[w];
-        {
-            let c = wall.closest_point([g.x[i], g.y[i]]);
-            let (dx, dy) = (g.x[i] - c[0], g.y[i] - c[1]);
-            let dist = (dx * dx + dy * dy).sqrt();
-            let delta = g.r[i] - dist;
-            if !(delta > 0.0) || dist == 0.0 {
-                return None;
-            }
-            let nrm = [dx / dist, dy / dist];
-            // The grain's contact point is at −r n from its centre.
-            let v = [
-                g.vx[i] + g.omega[i] * g.r[i] * nrm[1] - wall.velocity[0],
-                g.vy[i] - g.omega[i] * g.r[i] * nrm[0] - wall.velocity[1],
-            ];
-            let vn = v[0] * nrm[0] + v[1] * nrm[1];
-            let vt = -v[0] * nrm[1] + v[1] * nrm[0];
-            let old = self
-                .history
-                .get(&(g.id[i], WALL_KEY | w as u64))
-                .copied()
-                .unwrap_or(0.0);
-            let cn = self.model.damping_with(zeta, g.m[i]);
-            let f = contact_force(&self.model, delta, vn, vt, cn, wall.friction, old, self.dt);
-            Some((w, nrm, f, delta))
+        let c = wall.closest_point([g.x[i], g.y[i]]);
+        let (dx, dy) = (g.x[i] - c[0], g.y[i] - c[1]);
+        let dist = (dx * dx + dy * dy).sqrt();
+        let delta = g.r[i] - dist;
+        if !(delta > 0.0) || dist == 0.0 {
+            return None;
         }
+        let nrm = [dx / dist, dy / dist];
+        // The grain's contact point is at −r n from its centre.
+        let v = [
+            g.vx[i] + g.omega[i] * g.r[i] * nrm[1] - wall.velocity[0],
+            g.vy[i] - g.omega[i] * g.r[i] * nrm[0] - wall.velocity[1],
+        ];
+        let vn = v[0] * nrm[0] + v[1] * nrm[1];
+        let vt = -v[0] * nrm[1] + v[1] * nrm[0];
+        let old = self
+            .history
+            .get(&(g.id[i], WALL_KEY | w as u64))
+            .copied()
+            .unwrap_or(0.0);
+        let cn = self.model.damping_with(zeta, g.m[i]);
+        let f = contact_force(&self.model, delta, vn, vt, cn, wall.friction, old, self.dt);
+        Some((w, nrm, f, delta))
     }
 }
 

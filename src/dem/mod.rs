@@ -24,5 +24,5 @@ pub use contact::{ContactModel, DemError};
 pub use grains::Grains;
 pub use parallel::SlabDem;
 pub use sample::{load_csv, random_sequential_addition, settle, SizeDistribution};
-pub use system::{stable_time_step, DemSystem};
+pub use system::{stable_time_step, DemSetup, DemSystem};
 pub use walls::{closed_box, Wall};

@@ -15,9 +15,8 @@
 
 use super::contact::DemError;
 use super::grains::Grains;
-use super::system::{DemSystem, HistoryMap, WALL_KEY};
-use decomposition::{Comm, Incoming, Outgoing};
-use std::collections::HashMap;
+use super::system::{DemSetup, DemSystem, HistoryMap, WALL_KEY};
+use decomposition::Comm;
 
 /// Values sent per ghost every step: x, y, vx, vy, ω.
 const FORWARD: usize = 5;
@@ -26,19 +25,19 @@ const TAG_COUNT: u16 = 200;
 const TAG_DATA: u16 = 210;
 const TAG_FORWARD: u16 = 220;
 
+mod migration;
+
+use migration::{join, split, swap};
+
 /// One rank's share of a distributed DEM system.
 #[derive(Debug)]
 pub struct SlabDem {
     /// The local system: owned grains, then ghosts.
     pub system: DemSystem,
+    /// x-boundaries of every rank's slab: this rank owns `[bounds[rank], bounds[rank + 1])`.
     bounds: Vec<f64>,
-    lo: f64,
-    hi: f64,
-    left: Option<usize>,
-    right: Option<usize>,
-    /// Ghost cutoff from a face: 2 r_max + skin (m).
-    cutoff: f64,
-    skin: f64,
+    rank: usize,
+    /// Largest radius over all ranks (m): sets the skin and the ghost cutoff.
     rmax: f64,
     /// Owned grains whose state goes to the left / right neighbour every step.
     send: [Vec<u32>; 2],
@@ -65,53 +64,39 @@ impl SlabDem {
     /// beyond the outer ones belong to the first/last rank) and start the system: the
     /// checks of [`DemSystem::new`] run on the global set, so every rank reports the same
     /// error. Errors also when a slab is narrower than the ghost cutoff 2 r_max + skin.
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         all: Grains,
         bounds: &[f64],
-        walls: Vec<super::Wall>,
-        model: super::ContactModel,
-        gravity: [f64; 2],
-        dt: f64,
-        lambda: f64,
+        setup: DemSetup,
         allow_overlap: bool,
         comm: &dyn Comm,
     ) -> Result<Self, DemError> {
         assert_eq!(bounds.len(), comm.size() + 1, "one boundary per rank face");
         // Every check on the global set, so every rank reports the same error.
-        DemSystem::unstarted(
-            all.clone(),
-            Vec::new(),
-            model,
-            gravity,
-            dt,
-            lambda,
-            allow_overlap,
-        )?;
-        let mut s = Self::assemble(all, bounds, walls, model, gravity, dt, lambda, comm)?;
+        let check = DemSetup {
+            walls: Vec::new(),
+            ..setup.clone()
+        };
+        DemSystem::unstarted(all.clone(), check, allow_overlap)?;
+        let mut s = Self::assemble(all, bounds, setup, comm)?;
         s.rebuild(comm, HistoryMap::default());
         s.system.compute_forces();
         Ok(s)
     }
 
     /// Continue a checkpointed system: `all` holds every grain with the forces of its last
-    /// evaluation, `history` every live contact's stretch (pairs and walls), `walls` their
-    /// state then. Forces are not recomputed (see `io::grains_checkpoint`). Collective.
-    #[allow(clippy::too_many_arguments)]
+    /// evaluation, `history` every live contact's stretch (pairs and walls), `setup.walls`
+    /// their state then, `time` and `steps` the clock. Forces are not recomputed (see
+    /// `io::grains_checkpoint`). Collective.
     pub fn restore(
         all: Grains,
         history: HistoryMap,
         bounds: &[f64],
-        walls: Vec<super::Wall>,
-        model: super::ContactModel,
-        gravity: [f64; 2],
-        dt: f64,
-        lambda: f64,
-        time: f64,
-        steps: u64,
+        setup: DemSetup,
+        (time, steps): (f64, u64),
         comm: &dyn Comm,
     ) -> Result<Self, DemError> {
-        let mut s = Self::assemble(all, bounds, walls, model, gravity, dt, lambda, comm)?;
+        let mut s = Self::assemble(all, bounds, setup, comm)?;
         s.system.time = time;
         s.system.steps = steps;
         let (pairs, walls): (HistoryMap, HistoryMap) =
@@ -122,21 +107,15 @@ impl SlabDem {
     }
 
     /// This rank's grains of `all` in a system with no list yet.
-    #[allow(clippy::too_many_arguments)]
     fn assemble(
         all: Grains,
         bounds: &[f64],
-        walls: Vec<super::Wall>,
-        model: super::ContactModel,
-        gravity: [f64; 2],
-        dt: f64,
-        lambda: f64,
+        setup: DemSetup,
         comm: &dyn Comm,
     ) -> Result<Self, DemError> {
         let (rank, size) = (comm.rank(), comm.size());
         let rmax = all.r.iter().cloned().fold(0.0, f64::max);
-        let skin = DemSystem::skin_for(rmax);
-        let cutoff = 2.0 * rmax + skin;
+        let cutoff = cutoff_for(rmax);
         if size > 1 && bounds.windows(2).any(|w| w[1] - w[0] < cutoff) {
             return Err(DemError::Parameter {
                 name: "ranks",
@@ -145,22 +124,16 @@ impl SlabDem {
                       use fewer ranks or a wider region",
             });
         }
-        let (lo, hi) = (bounds[rank], bounds[rank + 1]);
         let keep: Vec<bool> = (0..all.len())
             .map(|i| owner(all.x[i], bounds) == rank)
             .collect();
         let mut mine = all;
         mine.retain(&keep);
-        let system = DemSystem::unstarted(mine, walls, model, gravity, dt, lambda, true)?;
+        let system = DemSystem::unstarted(mine, setup, true)?;
         Ok(Self {
             system,
             bounds: bounds.to_vec(),
-            lo,
-            hi,
-            left: (rank > 0).then(|| rank - 1),
-            right: (rank + 1 < size).then_some(rank + 1),
-            cutoff,
-            skin,
+            rank,
             rmax,
             send: [Vec::new(), Vec::new()],
             recv: [0, 0],
@@ -171,6 +144,20 @@ impl SlabDem {
             comm_seconds: 0.0,
             bufs: Default::default(),
         })
+    }
+
+    /// This rank's slab `[lo, hi)` (m).
+    fn slab(&self) -> (f64, f64) {
+        (self.bounds[self.rank], self.bounds[self.rank + 1])
+    }
+
+    /// The left and right neighbour ranks, where they exist.
+    fn peers(&self) -> [Option<usize>; 2] {
+        let ranks = self.bounds.len() - 1;
+        [
+            self.rank.checked_sub(1),
+            (self.rank + 1 < ranks).then_some(self.rank + 1),
+        ]
     }
 
     /// One velocity-Verlet step on every rank (collective).
@@ -197,13 +184,9 @@ impl SlabDem {
         &self.bounds
     }
 
-    /// Ghosts held now.
-    pub fn ghosts(&self) -> usize {
-        self.recv[0] + self.recv[1]
-    }
-
     /// Send the ghosts' new positions and velocities (fixed ghost set).
     fn forward(&mut self, comm: &dyn Comm) {
+        let peers = self.peers();
         let g = &self.system.grains;
         let [out_l, out_r, in_l, in_r] = &mut self.bufs;
         for (list, out) in self.send.iter().zip([&mut *out_l, &mut *out_r]) {
@@ -217,7 +200,7 @@ impl SlabDem {
         in_r.resize(self.recv[1] * FORWARD, 0.0);
         let wait = swap(
             comm,
-            [self.left, self.right],
+            peers,
             TAG_FORWARD,
             [out_l.as_slice(), out_r.as_slice()],
             [in_l.as_mut_slice(), in_r.as_mut_slice()],
@@ -255,15 +238,17 @@ impl SlabDem {
                 break;
             }
         }
-        let sys = &mut self.system;
         // 2. Ghosts: owned grains within the cutoff of a face go to that neighbour.
+        let ((lo, hi), [left, right]) = (self.slab(), self.peers());
+        let cutoff = cutoff_for(self.rmax);
+        let sys = &mut self.system;
         let g = &sys.grains;
         let mut send = [Vec::new(), Vec::new()];
         for i in 0..sys.owned {
-            if self.left.is_some() && g.x[i] < self.lo + self.cutoff {
+            if left.is_some() && g.x[i] < lo + cutoff {
                 send[0].push(i as u32);
             }
-            if self.right.is_some() && g.x[i] >= self.hi - self.cutoff {
+            if right.is_some() && g.x[i] >= hi - cutoff {
                 send[1].push(i as u32);
             }
         }
@@ -277,14 +262,14 @@ impl SlabDem {
         let got = self.exchange_varlen(comm, &msgs);
         let sys = &mut self.system;
         for (side, msg) in got.iter().enumerate() {
-            let (grains, _) = split(msg, Grains::PACKED);
+            let (grains, _) = split(msg);
             for p in grains.chunks_exact(Grains::PACKED) {
                 sys.grains.push_packed(p);
             }
             self.recv[side] = grains.len() / Grains::PACKED;
         }
         // 3. The list; the spatial sort renumbers owned grains, so follow it.
-        let order = sys.rebuild_from(&live, self.skin, self.rmax);
+        let order = sys.rebuild_from(&live, DemSystem::skin_for(self.rmax), self.rmax);
         if !order.is_empty() {
             let mut new_of = vec![0u32; order.len()];
             for (k, &o) in order.iter().enumerate() {
@@ -298,154 +283,11 @@ impl SlabDem {
         }
         self.send = send;
     }
-
-    /// One migration round: grains outside this slab go to the neighbour on that side, with
-    /// their contact history. Returns whether this rank still holds grains outside its slab
-    /// afterwards (they arrived from two slabs away after a rebalance).
-    fn migrate_round(&mut self, comm: &dyn Comm, live: &mut HistoryMap) -> bool {
-        let sys = &mut self.system;
-        let mut dest: HashMap<u64, usize> = HashMap::new();
-        let mut grains_out = [Vec::new(), Vec::new()];
-        let mut keep = vec![true; sys.owned];
-        let g = &sys.grains;
-        for i in 0..sys.owned {
-            let side = if g.x[i] < self.lo && self.left.is_some() {
-                0
-            } else if g.x[i] >= self.hi && self.right.is_some() {
-                1
-            } else {
-                continue;
-            };
-            g.pack(i, &mut grains_out[side]);
-            dest.insert(g.id[i], side);
-            keep[i] = false;
-        }
-        let mut hist_out = [Vec::new(), Vec::new()];
-        if !dest.is_empty() {
-            let entries = live.iter().chain(sys.history.iter());
-            for (&(a, b), &s) in entries {
-                let mut sides = [false; 2];
-                for id in [a, b] {
-                    if let Some(&d) = dest.get(&id) {
-                        sides[d] = true;
-                    }
-                }
-                for (d, out) in hist_out.iter_mut().enumerate() {
-                    if sides[d] {
-                        out.extend_from_slice(&[f64::from_bits(a), f64::from_bits(b), s]);
-                    }
-                }
-            }
-        }
-        self.migrated += dest.len() as u64;
-        sys.grains.retain(&keep);
-        sys.owned = sys.grains.len();
-        let msgs = [
-            join(&grains_out[0], &hist_out[0]),
-            join(&grains_out[1], &hist_out[1]),
-        ];
-        let got = self.exchange_varlen(comm, &msgs);
-        let sys = &mut self.system;
-        for msg in got.iter() {
-            let (grains, hist) = split(msg, Grains::PACKED);
-            for p in grains.chunks_exact(Grains::PACKED) {
-                sys.grains.push_packed(p);
-            }
-            for h in hist.chunks_exact(3) {
-                let key = (h[0].to_bits(), h[1].to_bits());
-                if key.1 & WALL_KEY != 0 {
-                    sys.history.insert(key, h[2]);
-                } else {
-                    live.insert(key, h[2]);
-                }
-            }
-        }
-        sys.owned = sys.grains.len();
-        let g = &sys.grains;
-        (0..sys.owned).any(|i| {
-            (g.x[i] < self.lo && self.left.is_some()) || (g.x[i] >= self.hi && self.right.is_some())
-        })
-    }
-
-    /// New slab boundaries that balance the owned grain counts (quantiles of all centres,
-    /// each slab at least one cutoff wide), when the most loaded rank holds over 10 % more
-    /// than the mean. Collective; the grains then migrate in rounds.
-    fn rebalance(&mut self, comm: &dyn Comm) {
-        let counts = comm.all_gather_f64(&[self.system.owned as f64]);
-        let mean = counts.iter().sum::<f64>() / counts.len() as f64;
-        let max = counts.iter().cloned().fold(0.0, f64::max);
-        if counts.len() < 2 || max <= 1.1 * mean {
-            return;
-        }
-        let x = comm.all_gather_f64(&self.system.grains.x[..self.system.owned]);
-        let last = self.bounds.len() - 1;
-        let bounds = balanced_bounds(
-            &x,
-            self.bounds[0],
-            self.bounds[last],
-            counts.len(),
-            self.cutoff,
-        );
-        let rank = comm.rank();
-        self.lo = bounds[rank];
-        self.hi = bounds[rank + 1];
-        self.bounds = bounds;
-        self.rebalances += 1;
-    }
-
-    /// Send `msgs[0]` to the left and `msgs[1]` to the right neighbour (where they exist)
-    /// and receive theirs: sizes first, then the payloads. Returns [from left, from right].
-    fn exchange_varlen(&mut self, comm: &dyn Comm, msgs: &[Vec<f64>; 2]) -> [Vec<f64>; 2] {
-        let lens = msgs.clone().map(|m| [m.len() as u64]);
-        let mut got_lens = [[0u64], [0u64]];
-        let [l0, l1] = &mut got_lens;
-        self.comm_seconds += swap(
-            comm,
-            [self.left, self.right],
-            TAG_COUNT,
-            [&lens[0], &lens[1]],
-            [l0, l1],
-        );
-        let mut got = got_lens.map(|[n]| vec![0.0f64; n as usize]);
-        let [g0, g1] = &mut got;
-        self.comm_seconds += swap(
-            comm,
-            [self.left, self.right],
-            TAG_DATA,
-            [&msgs[0], &msgs[1]],
-            [g0, g1],
-        );
-        got
-    }
 }
 
-/// One exchange round with both neighbours: `out[side]` goes to that neighbour (tag
-/// `tag + side`), `into[side]` is filled from it (its buffer's length is the expected
-/// size). Sides without a neighbour are skipped. Returns the seconds spent waiting.
-fn swap<T: bytemuck::Pod>(
-    comm: &dyn Comm,
-    peers: [Option<usize>; 2],
-    tag: u16,
-    out: [&[T]; 2],
-    into: [&mut [T]; 2],
-) -> f64 {
-    let mut sends = Vec::new();
-    let mut recvs = Vec::new();
-    for (side, inc) in into.into_iter().enumerate() {
-        if let Some(p) = peers[side] {
-            sends.push(Outgoing {
-                peer: p,
-                tag: tag + side as u16,
-                data: bytemuck::cast_slice(out[side]),
-            });
-            recvs.push(Incoming {
-                peer: p,
-                tag: tag + 1 - side as u16,
-                data: bytemuck::cast_slice_mut(inc),
-            });
-        }
-    }
-    comm.exchange(&sends, &mut recvs, &mut || {})
+/// Ghost cutoff from a slab face for grains of radius up to `rmax`: 2 r_max + skin (m).
+fn cutoff_for(rmax: f64) -> f64 {
+    2.0 * rmax + DemSystem::skin_for(rmax)
 }
 
 /// The rank of `bounds` whose range holds `x` (the outer ranks take everything beyond).
@@ -473,24 +315,6 @@ pub fn balanced_bounds(x: &[f64], x0: f64, x1: f64, ranks: usize, min_width: f64
     }
     b.push(x1);
     b
-}
-
-/// `[n_a, a…, b…]`.
-fn join(a: &[f64], b: &[f64]) -> Vec<f64> {
-    let mut v = Vec::with_capacity(1 + a.len() + b.len());
-    v.push(a.len() as f64);
-    v.extend_from_slice(a);
-    v.extend_from_slice(b);
-    v
-}
-
-/// Inverse of [`join`] (an empty message is two empty parts).
-fn split(msg: &[f64], _unit: usize) -> (&[f64], &[f64]) {
-    if msg.is_empty() {
-        return (&[], &[]);
-    }
-    let n = msg[0] as usize;
-    (&msg[1..1 + n], &msg[1 + n..])
 }
 
 #[cfg(test)]
@@ -535,18 +359,14 @@ mod tests {
         )
         .unwrap();
         let comm = SingleProcess;
-        let mut dist = SlabDem::new(
-            g,
-            &[0.0, 0.03],
+        let setup = DemSetup {
             walls,
             model,
-            [0.0, -9.81],
+            gravity: [0.0, -9.81],
             dt,
-            0.1,
-            false,
-            &comm,
-        )
-        .unwrap();
+            lambda: 0.1,
+        };
+        let mut dist = SlabDem::new(g, &[0.0, 0.03], setup, false, &comm).unwrap();
         for _ in 0..2000 {
             serial.step();
             dist.step(&comm);

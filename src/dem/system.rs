@@ -54,6 +54,21 @@ pub fn stable_time_step(grains: &Grains, model: &ContactModel, lambda: f64) -> f
     lambda * model.critical_time_step(m_min)
 }
 
+/// Everything but the grains that a DEM system is built from.
+#[derive(Debug, Clone)]
+pub struct DemSetup {
+    /// The walls.
+    pub walls: Vec<Wall>,
+    /// Contact law between grains.
+    pub model: ContactModel,
+    /// Gravity (m/s²).
+    pub gravity: [f64; 2],
+    /// Time step (s).
+    pub dt: f64,
+    /// The stability fraction λ that `dt` must respect: dt ≤ λ Δt_cr (eq. 5.60).
+    pub lambda: f64,
+}
+
 /// Grains, walls and the contact law of one rank, advanced by velocity Verlet.
 #[derive(Debug, Clone)]
 pub struct DemSystem {
@@ -125,7 +140,14 @@ impl DemSystem {
         lambda: f64,
         allow_overlap: bool,
     ) -> Result<Self, DemError> {
-        let mut s = Self::unstarted(grains, walls, model, gravity, dt, lambda, allow_overlap)?;
+        let setup = DemSetup {
+            walls,
+            model,
+            gravity,
+            dt,
+            lambda,
+        };
+        let mut s = Self::unstarted(grains, setup, allow_overlap)?;
         s.rebuild_list();
         s.compute_forces();
         Ok(s)
@@ -133,16 +155,18 @@ impl DemSystem {
 
     /// [`DemSystem::new`] without the first list build and force evaluation (the
     /// distributed driver adds ghosts first).
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn unstarted(
         grains: Grains,
-        walls: Vec<Wall>,
-        model: ContactModel,
-        gravity: [f64; 2],
-        dt: f64,
-        lambda: f64,
+        setup: DemSetup,
         allow_overlap: bool,
     ) -> Result<Self, DemError> {
+        let DemSetup {
+            walls,
+            model,
+            gravity,
+            dt,
+            lambda,
+        } = setup;
         model.validate()?;
         if !(lambda > 0.0 && lambda <= 1.0) {
             return Err(DemError::Parameter {
@@ -325,11 +349,6 @@ impl DemSystem {
     pub fn remove_wall(&mut self, w: usize) {
         self.walls[w].removed = true;
         self.walls_built_at.clear();
-    }
-
-    /// Index of the owned grain with this id, if this system owns it (O(N)).
-    pub fn index_of(&self, id: u64) -> Option<usize> {
-        self.grains.id[..self.owned].iter().position(|&x| x == id)
     }
 }
 

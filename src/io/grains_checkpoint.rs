@@ -9,7 +9,7 @@
 use super::checkpoint::write_atomically;
 use super::h5par::{self, Access, Block};
 use super::OutputError;
-use crate::dem::system::{HistoryMap, WALL_KEY};
+use crate::dem::system::HistoryMap;
 use crate::dem::{Grains, SlabDem, Wall};
 use decomposition::Comm;
 use hdf5::types::VarLenUnicode;
@@ -255,9 +255,4 @@ pub fn apply_walls(walls: &mut [Wall], restored: &[([f64; 2], [f64; 2], bool)]) 
         w.b = b;
         w.removed = removed;
     }
-}
-
-/// Whether a history key belongs to a wall contact.
-pub fn is_wall_key(key: (u64, u64)) -> bool {
-    key.1 & WALL_KEY != 0
 }

@@ -50,11 +50,7 @@ impl GrainWriter {
             path: path.clone(),
             source,
         };
-        let resume = resume_after.filter(|_| path.exists());
-        let (file, access) = match resume {
-            Some(_) => h5par::open(&path, comm, true).map_err(h5)?,
-            None => h5par::create(&path, comm).map_err(h5)?,
-        };
+        let (file, access, kept) = h5par::open_series(&path, comm, resume_after).map_err(h5)?;
         let mut w = Self {
             path: path.clone(),
             file,
@@ -62,20 +58,8 @@ impl GrainWriter {
             root: comm.is_root(),
             written: Vec::new(),
         };
-        if let Some(last) = resume {
-            let mut names = w.file.member_names().map_err(h5)?;
-            names.sort();
-            for group in names {
-                let Some(step) = group
-                    .strip_prefix("step_")
-                    .and_then(|s| s.parse::<u64>().ok())
-                else {
-                    continue;
-                };
-                if step > last {
-                    w.file.unlink(&group).map_err(h5)?;
-                    continue;
-                }
+        if let Some(kept) = kept {
+            for (group, _) in kept {
                 let g = w.file.group(&group).map_err(h5)?;
                 let time = g
                     .attr("time_s")

@@ -61,6 +61,44 @@ pub fn open(path: &Path, comm: &dyn Comm, write: bool) -> hdf5::Result<(hdf5::Fi
     }
 }
 
+/// The snapshot groups a restart keeps: (name, step), in order.
+pub type KeptGroups = Vec<(String, u64)>;
+
+/// Open the snapshot series `path` of a run on every rank of `comm`. Collective.
+///
+/// With `resume_after = None`, or when the file does not exist, it is created (truncating
+/// an old one) and no groups are returned. With `Some(step)` (a restart) the file is kept:
+/// its `step_NNNNNNNN` groups up to `step` stay and are returned in order as (name, step);
+/// later ones, written after the checkpoint by the run being redone, are unlinked.
+pub fn open_series(
+    path: &Path,
+    comm: &dyn Comm,
+    resume_after: Option<u64>,
+) -> hdf5::Result<(hdf5::File, Access, Option<KeptGroups>)> {
+    let Some(last) = resume_after.filter(|_| path.exists()) else {
+        let (file, access) = create(path, comm)?;
+        return Ok((file, access, None));
+    };
+    let (file, access) = open(path, comm, true)?;
+    let mut names = file.member_names()?;
+    names.sort();
+    let mut kept = Vec::new();
+    for group in names {
+        let Some(step) = group
+            .strip_prefix("step_")
+            .and_then(|s| s.parse::<u64>().ok())
+        else {
+            continue;
+        };
+        if step > last {
+            file.unlink(&group)?;
+        } else {
+            kept.push((group, step));
+        }
+    }
+    Ok((file, access, Some(kept)))
+}
+
 /// A hyperslab: `start` and `count` per dimension of the dataset.
 #[derive(Debug, Clone)]
 pub struct Block {

@@ -75,11 +75,7 @@ impl SnapshotWriter {
             path: path.clone(),
             source,
         };
-        let resume = resume_after.filter(|_| path.exists());
-        let (file, access) = match resume {
-            Some(_) => h5par::open(&path, comm, true).map_err(h5)?,
-            None => h5par::create(&path, comm).map_err(h5)?,
-        };
+        let (file, access, kept) = h5par::open_series(&path, comm, resume_after).map_err(h5)?;
         let mut w = Self {
             path: path.clone(),
             file,
@@ -89,8 +85,8 @@ impl SnapshotWriter {
             root: comm.is_root(),
             written: Vec::new(),
         };
-        if let Some(last) = resume {
-            w.adopt_existing(last).map_err(h5)?;
+        if let Some(kept) = kept {
+            w.adopt_existing(kept).map_err(h5)?;
             if w.root {
                 w.write_xdmf()?;
             }
@@ -98,21 +94,9 @@ impl SnapshotWriter {
         Ok(w)
     }
 
-    /// Keep the snapshots of steps ≤ `last`, unlink the later ones.
-    fn adopt_existing(&mut self, last: u64) -> hdf5::Result<()> {
-        let mut names = self.file.member_names()?;
-        names.sort();
-        for group in names {
-            let Some(step) = group
-                .strip_prefix("step_")
-                .and_then(|s| s.parse::<u64>().ok())
-            else {
-                continue;
-            };
-            if step > last {
-                self.file.unlink(&group)?;
-                continue;
-            }
+    /// Record the snapshots kept on a restart (their time and fields).
+    fn adopt_existing(&mut self, kept: Vec<(String, u64)>) -> hdf5::Result<()> {
+        for (group, step) in kept {
             let g = self.file.group(&group)?;
             let time_s = g.attr("time_s")?.read_scalar::<f64>()?;
             let mut fields = Vec::new();

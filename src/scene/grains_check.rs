@@ -3,7 +3,7 @@
 use super::grains::*;
 use super::validate::{positive, validate_checks, Context};
 use super::SceneError;
-use crate::dem::{ContactModel, SizeDistribution, Wall};
+use crate::dem::{stable_time_step, ContactModel, DemSetup, Grains, SizeDistribution, Wall};
 use std::path::{Path, PathBuf};
 
 /// A grains scene that passed validation.
@@ -25,18 +25,7 @@ pub fn grain_result_names(s: &GrainScene) -> Vec<String> {
     for a in &s.analyses {
         match a {
             GrainAnalysis::ColumnCollapse { .. } => {
-                for q in [
-                    "runout",
-                    "final_height",
-                    "aspect_ratio",
-                    "front_m",
-                    "height_m",
-                    "initial_length_m",
-                    "initial_height_m",
-                    "stop_time",
-                    "dem_law_ratio",
-                    "experiment_ratio",
-                ] {
+                for q in crate::analysis::collapse::QUANTITIES {
                     names.push(format!("collapse.{q}"));
                 }
             }
@@ -272,6 +261,34 @@ impl ValidGrainScene {
             friction: c.friction,
             rolling_friction: c.rolling_friction,
             tangential_damping: c.tangential_damping,
+        }
+    }
+
+    /// λ of the time-step choice: the fraction of Δt_cr the step must respect.
+    pub fn lambda(&self) -> f64 {
+        match self.scene.grains.time_step {
+            TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => lambda,
+        }
+    }
+
+    /// The time step for `grains` (s): the fixed one, or λ Δt_cr of the lightest grain.
+    pub fn time_step(&self, grains: &Grains) -> f64 {
+        match self.scene.grains.time_step {
+            TimeStepSpec::Fixed { time_step_s, .. } => time_step_s,
+            TimeStepSpec::Critical { lambda } => {
+                stable_time_step(grains, &self.contact_model(), lambda)
+            }
+        }
+    }
+
+    /// Walls (at t = 0), contacts, gravity, time step and λ of the scene for `grains`.
+    pub fn dem_setup(&self, grains: &Grains) -> DemSetup {
+        DemSetup {
+            walls: self.walls(),
+            model: self.contact_model(),
+            gravity: self.scene.grains.gravity_m_s2,
+            dt: self.time_step(grains),
+            lambda: self.lambda(),
         }
     }
 

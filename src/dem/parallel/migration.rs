@@ -1,0 +1,183 @@
+//! Moving grains between slabs: one migration round with both neighbours, the slab
+//! rebalancing, and the message plumbing (a swap with both neighbours, variable-length
+//! messages as sizes then payloads).
+
+use super::{balanced_bounds, cutoff_for, SlabDem, TAG_COUNT, TAG_DATA};
+use crate::dem::grains::Grains;
+use crate::dem::system::{HistoryMap, WALL_KEY};
+use decomposition::{Comm, Incoming, Outgoing};
+use std::collections::HashMap;
+
+impl SlabDem {
+    /// One migration round: grains outside this slab go to the neighbour on that side, with
+    /// their contact history. Returns whether this rank still holds grains outside its slab
+    /// afterwards (they arrived from two slabs away after a rebalance).
+    pub(super) fn migrate_round(&mut self, comm: &dyn Comm, live: &mut HistoryMap) -> bool {
+        let (slab, peers) = (self.slab(), self.peers());
+        let sys = &mut self.system;
+        let mut dest: HashMap<u64, usize> = HashMap::new();
+        let mut grains_out = [Vec::new(), Vec::new()];
+        let mut keep = vec![true; sys.owned];
+        let g = &sys.grains;
+        for i in 0..sys.owned {
+            let Some(side) = leaves_to(g.x[i], slab, peers) else {
+                continue;
+            };
+            g.pack(i, &mut grains_out[side]);
+            dest.insert(g.id[i], side);
+            keep[i] = false;
+        }
+        let mut hist_out = [Vec::new(), Vec::new()];
+        if !dest.is_empty() {
+            let entries = live.iter().chain(sys.history.iter());
+            for (&(a, b), &s) in entries {
+                let mut sides = [false; 2];
+                for id in [a, b] {
+                    if let Some(&d) = dest.get(&id) {
+                        sides[d] = true;
+                    }
+                }
+                for (d, out) in hist_out.iter_mut().enumerate() {
+                    if sides[d] {
+                        out.extend_from_slice(&[f64::from_bits(a), f64::from_bits(b), s]);
+                    }
+                }
+            }
+        }
+        self.migrated += dest.len() as u64;
+        sys.grains.retain(&keep);
+        sys.owned = sys.grains.len();
+        let msgs = [
+            join(&grains_out[0], &hist_out[0]),
+            join(&grains_out[1], &hist_out[1]),
+        ];
+        let got = self.exchange_varlen(comm, &msgs);
+        let sys = &mut self.system;
+        for msg in got.iter() {
+            let (grains, hist) = split(msg);
+            for p in grains.chunks_exact(Grains::PACKED) {
+                sys.grains.push_packed(p);
+            }
+            for h in hist.chunks_exact(3) {
+                let key = (h[0].to_bits(), h[1].to_bits());
+                if key.1 & WALL_KEY != 0 {
+                    sys.history.insert(key, h[2]);
+                } else {
+                    live.insert(key, h[2]);
+                }
+            }
+        }
+        sys.owned = sys.grains.len();
+        let g = &sys.grains;
+        (0..sys.owned).any(|i| leaves_to(g.x[i], slab, peers).is_some())
+    }
+
+    /// New slab boundaries that balance the owned grain counts (quantiles of all centres,
+    /// each slab at least one cutoff wide), when the most loaded rank holds over 10 % more
+    /// than the mean. Collective; the grains then migrate in rounds.
+    pub(super) fn rebalance(&mut self, comm: &dyn Comm) {
+        let counts = comm.all_gather_f64(&[self.system.owned as f64]);
+        let mean = counts.iter().sum::<f64>() / counts.len() as f64;
+        let max = counts.iter().cloned().fold(0.0, f64::max);
+        if counts.len() < 2 || max <= 1.1 * mean {
+            return;
+        }
+        let x = comm.all_gather_f64(&self.system.grains.x[..self.system.owned]);
+        let last = self.bounds.len() - 1;
+        let bounds = balanced_bounds(
+            &x,
+            self.bounds[0],
+            self.bounds[last],
+            counts.len(),
+            cutoff_for(self.rmax),
+        );
+        self.bounds = bounds;
+        self.rebalances += 1;
+    }
+
+    /// Send `msgs[0]` to the left and `msgs[1]` to the right neighbour (where they exist)
+    /// and receive theirs: sizes first, then the payloads. Returns [from left, from right].
+    pub(super) fn exchange_varlen(
+        &mut self,
+        comm: &dyn Comm,
+        msgs: &[Vec<f64>; 2],
+    ) -> [Vec<f64>; 2] {
+        let lens = msgs.clone().map(|m| [m.len() as u64]);
+        let mut got_lens = [[0u64], [0u64]];
+        let [l0, l1] = &mut got_lens;
+        self.comm_seconds += swap(
+            comm,
+            self.peers(),
+            TAG_COUNT,
+            [&lens[0], &lens[1]],
+            [l0, l1],
+        );
+        let mut got = got_lens.map(|[n]| vec![0.0f64; n as usize]);
+        let [g0, g1] = &mut got;
+        self.comm_seconds += swap(comm, self.peers(), TAG_DATA, [&msgs[0], &msgs[1]], [g0, g1]);
+        got
+    }
+}
+
+/// One exchange round with both neighbours: `out[side]` goes to that neighbour (tag
+/// `tag + side`), `into[side]` is filled from it (its buffer's length is the expected
+/// size). Sides without a neighbour are skipped. Returns the seconds spent waiting.
+pub(super) fn swap<T: bytemuck::Pod>(
+    comm: &dyn Comm,
+    peers: [Option<usize>; 2],
+    tag: u16,
+    out: [&[T]; 2],
+    into: [&mut [T]; 2],
+) -> f64 {
+    let mut sends = Vec::new();
+    let mut recvs = Vec::new();
+    for (side, inc) in into.into_iter().enumerate() {
+        if let Some(p) = peers[side] {
+            sends.push(Outgoing {
+                peer: p,
+                tag: tag + side as u16,
+                data: bytemuck::cast_slice(out[side]),
+            });
+            recvs.push(Incoming {
+                peer: p,
+                tag: tag + 1 - side as u16,
+                data: bytemuck::cast_slice_mut(inc),
+            });
+        }
+    }
+    comm.exchange(&sends, &mut recvs, &mut || {})
+}
+
+/// Which neighbour (0 left, 1 right) a grain at `x` must go to, if it is outside the slab
+/// `(lo, hi)` on a side that has a neighbour in `peers`.
+pub(super) fn leaves_to(
+    x: f64,
+    (lo, hi): (f64, f64),
+    [left, right]: [Option<usize>; 2],
+) -> Option<usize> {
+    if x < lo && left.is_some() {
+        Some(0)
+    } else if x >= hi && right.is_some() {
+        Some(1)
+    } else {
+        None
+    }
+}
+
+/// `[n_a, a…, b…]`.
+pub(super) fn join(a: &[f64], b: &[f64]) -> Vec<f64> {
+    let mut v = Vec::with_capacity(1 + a.len() + b.len());
+    v.push(a.len() as f64);
+    v.extend_from_slice(a);
+    v.extend_from_slice(b);
+    v
+}
+
+/// Inverse of [`join`] (an empty message is two empty parts).
+pub(super) fn split(msg: &[f64]) -> (&[f64], &[f64]) {
+    if msg.is_empty() {
+        return (&[], &[]);
+    }
+    let n = msg[0] as usize;
+    (&msg[1..1 + n], &msg[1 + n..])
+}

@@ -1,0 +1,146 @@
+//! The sample of a grains run: packed (random addition, distributed settling, trimming)
+//! or loaded, spread over the ranks' slabs; and the collective gathers of its state.
+
+use crate::dem::parallel::balanced_bounds;
+use crate::dem::sample::{load_csv, random_sequential_addition};
+use crate::dem::{DemError, DemSystem, Grains, SlabDem};
+use crate::run::RunError;
+use crate::scene::{size_distribution, SampleSpec, ValidGrainScene};
+use decomposition::Comm;
+
+/// Every rank's owned grains, gathered on every rank and sorted by id (collective).
+pub fn gather_grains(sys: &DemSystem, comm: &dyn Comm) -> Grains {
+    let mut local = Vec::with_capacity(sys.owned() * Grains::PACKED);
+    for i in 0..sys.owned() {
+        sys.grains.pack(i, &mut local);
+    }
+    let all = comm.all_gather_f64(&local);
+    let mut rows: Vec<&[f64]> = all.chunks_exact(Grains::PACKED).collect();
+    rows.sort_by_key(|p| p[9].to_bits());
+    let mut g = Grains::default();
+    for p in rows {
+        g.push_packed(p);
+    }
+    g
+}
+
+/// Global sums of kinetic energy, momentum and grain count (collective).
+pub(super) fn global_state(d: &SlabDem, comm: &dyn Comm) -> (f64, [f64; 2], f64) {
+    let p = d.system.grains.momentum_of(d.system.owned());
+    let mut v = [
+        d.system.owned_kinetic_energy(),
+        p[0],
+        p[1],
+        d.system.owned() as f64,
+    ];
+    comm.sum_f64(&mut v);
+    (v[0], [v[1], v[2]], v[3])
+}
+
+/// Prepare the sample of `scene` (identical on every rank; settling runs distributed).
+/// Returns the grains (ids 0..N) and the settling steps.
+pub(super) fn prepare(scene: &ValidGrainScene, comm: &dyn Comm) -> Result<(Grains, u64), RunError> {
+    let s = &scene.scene;
+    let rho = s.grains.density_kg_m3;
+    let (grains, settle) = match &s.grains.sample {
+        SampleSpec::Csv { file } => (load_csv(&scene.base_dir.join(file), rho)?, None),
+        SampleSpec::Pack {
+            min_m,
+            max_m,
+            sizes,
+            solid_fraction,
+            seed,
+            settle,
+        } => (
+            random_sequential_addition(
+                *min_m,
+                *max_m,
+                size_distribution(sizes),
+                rho,
+                *solid_fraction,
+                *seed,
+                20_000,
+            ),
+            settle.clone(),
+        ),
+    };
+    if grains.is_empty() {
+        return Err(DemError::Parameter {
+            name: "sample",
+            value: 0.0,
+            why: "the sample holds no grains: enlarge the packing rectangle or check the CSV",
+        }
+        .into());
+    }
+    let Some(st) = settle else {
+        return Ok((grains, 0));
+    };
+    let mut d = start(scene, grains, true, comm)?;
+    d.system.global_damping = st.damping_1_s;
+    let mut steps = 0;
+    let n = d.global_count(comm) as f64;
+    loop {
+        for _ in 0..100 {
+            d.step(comm);
+        }
+        steps += 100;
+        let (ke, _, _) = global_state(&d, comm);
+        if ke / n < st.kinetic_energy_per_grain_j_m {
+            break;
+        }
+        if steps >= st.max_steps {
+            return Err(DemError::Parameter {
+                name: "max_steps",
+                value: st.max_steps as f64,
+                why: "settling did not bring the kinetic energy per grain below \
+                      kinetic_energy_per_grain_j_m: raise max_steps or damping_1_s",
+            }
+            .into());
+        }
+    }
+    let settled = gather_grains(&d.system, comm);
+    // Keep the grains below the trim height, at rest, renumbered 0..N.
+    let mut g = Grains::default();
+    for i in 0..settled.len() {
+        if st.trim_above_m.is_some_and(|h| settled.y[i] > h) {
+            continue;
+        }
+        let mut p = Vec::with_capacity(Grains::PACKED);
+        settled.pack(i, &mut p);
+        p[2] = 0.0;
+        p[3] = 0.0;
+        p[5] = 0.0;
+        p[9] = f64::from_bits(g.len() as u64);
+        g.push_packed(&p);
+    }
+    Ok((g, steps))
+}
+
+/// Slab boundaries for `grains` over the ranks of `comm`, balanced by grain count.
+pub(super) fn bounds_for(scene: &ValidGrainScene, grains: &Grains, comm: &dyn Comm) -> Vec<f64> {
+    let s = &scene.scene;
+    let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
+    let cutoff = 2.0 * rmax + DemSystem::skin_for(rmax);
+    balanced_bounds(
+        &grains.x,
+        s.region.min_m[0],
+        s.region.max_m[0],
+        comm.size(),
+        cutoff,
+    )
+}
+
+/// A distributed system of `grains` with the scene's walls and contacts.
+pub(super) fn start(
+    scene: &ValidGrainScene,
+    grains: Grains,
+    allow_overlap: bool,
+    comm: &dyn Comm,
+) -> Result<SlabDem, RunError> {
+    let s = &scene.scene;
+    let bounds = bounds_for(scene, &grains, comm);
+    let setup = scene.dem_setup(&grains);
+    let mut d = SlabDem::new(grains, &bounds, setup, allow_overlap, comm)?;
+    d.system.global_damping = s.grains.global_damping_1_s;
+    Ok(d)
+}
