@@ -13,6 +13,7 @@ pub mod dem;
 pub mod gpu;
 pub mod io;
 pub mod lbm;
+pub mod mpm;
 pub mod progress;
 pub mod run;
 pub mod run_grains;

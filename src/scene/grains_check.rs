@@ -55,7 +55,7 @@ pub fn parse_grains(text: &str, path: &Path) -> Result<ValidGrainScene, SceneErr
     })
 }
 
-fn non_negative(ctx: &Context, key: &str, v: f64) -> Result<(), SceneError> {
+pub(super) fn non_negative(ctx: &Context, key: &str, v: f64) -> Result<(), SceneError> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
@@ -63,7 +63,7 @@ fn non_negative(ctx: &Context, key: &str, v: f64) -> Result<(), SceneError> {
     }
 }
 
-fn rectangle(ctx: &Context, key: &str, lo: [f64; 2], hi: [f64; 2]) -> Result<(), SceneError> {
+pub(super) fn rectangle(ctx: &Context, key: &str, lo: [f64; 2], hi: [f64; 2]) -> Result<(), SceneError> {
     if lo.iter().chain(&hi).all(|v| v.is_finite()) && lo[0] < hi[0] && lo[1] < hi[1] {
         Ok(())
     } else {

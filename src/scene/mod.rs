@@ -5,6 +5,8 @@
 mod build;
 mod grains;
 mod grains_check;
+mod mpm;
+mod mpm_check;
 mod schema;
 mod units;
 mod validate;
@@ -12,6 +14,8 @@ mod validate;
 pub use build::{build_lattice, solid_id_of, BuiltGeometry};
 pub use grains::*;
 pub use grains_check::{grain_result_names, parse_grains, size_distribution, ValidGrainScene};
+pub use mpm::*;
+pub use mpm_check::{body_shape, mpm_result_names, parse_mpm, ValidMpmScene};
 pub use schema::*;
 pub use units::{derive, TimeStepChoice, Units};
 
@@ -83,10 +87,12 @@ pub enum AnyScene {
     Fluid(Box<ValidScene>),
     /// Dry grains (DEM only).
     Grains(Box<ValidGrainScene>),
+    /// Continuum bodies (MPM only).
+    Mpm(Box<ValidMpmScene>),
 }
 
-/// Read, parse and validate a scene of either kind: a `[grains]` table without `[fluid]`
-/// is a grains scene, anything else a fluid scene.
+/// Read, parse and validate a scene of any kind: a `[grains]` table without `[fluid]` is a
+/// grains scene, an `[mpm]` table alone an MPM scene, anything else a fluid scene.
 pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
         path: path.to_owned(),
@@ -96,6 +102,20 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
         path: path.to_owned(),
         message: e.to_string().trim_end().to_string(),
     })?;
+    if table.contains_key("mpm") {
+        if let Some(other) = ["fluid", "grains"].into_iter().find(|k| table.contains_key(*k)) {
+            return Err(SceneError::Invalid {
+                path: path.to_owned(),
+                line: None,
+                key: "mpm".into(),
+                message: format!(
+                    "a scene with both [mpm] and [{other}] needs coupling between them, which \
+                     grainflow does not run yet; split it into separate scenes"
+                ),
+            });
+        }
+        return Ok(AnyScene::Mpm(Box::new(parse_mpm(&text, path)?)));
+    }
     match (table.contains_key("grains"), table.contains_key("fluid")) {
         (true, true) => Err(SceneError::Invalid {
             path: path.to_owned(),

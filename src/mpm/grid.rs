@@ -1,0 +1,192 @@
+//! The background grid: geometry, node fields and the grid boundary conditions.
+//!
+//! Cells are `h` × `h` squares, `nx` × `ny` of them, with the domain's lower-left corner at
+//! the origin. Nodes run from −1 to `nx + 1` (and −1 to `ny + 1`): the outer layer pads the
+//! support of GIMP points in the boundary cells and obeys the same boundary condition as
+//! the boundary nodes. Node fields are stored column by column (node column `I`, then row).
+
+/// Grid geometry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridSpec {
+    /// Cells along x.
+    pub nx: usize,
+    /// Cells along y.
+    pub ny: usize,
+    /// Cell size (m).
+    pub h: f64,
+}
+
+impl GridSpec {
+    /// Nodes per node column, padding included.
+    pub fn rows(&self) -> usize {
+        self.ny + 3
+    }
+    /// Node columns, padding included.
+    pub fn cols(&self) -> usize {
+        self.nx + 3
+    }
+    /// Storage index of node (I, J), −1 ≤ I ≤ nx+1, −1 ≤ J ≤ ny+1.
+    #[inline(always)]
+    pub fn node(&self, i: i64, j: i64) -> usize {
+        (i + 1) as usize * self.rows() + (j + 1) as usize
+    }
+    /// Domain width (m).
+    pub fn width(&self) -> f64 {
+        self.nx as f64 * self.h
+    }
+    /// Domain height (m).
+    pub fn height(&self) -> f64 {
+        self.ny as f64 * self.h
+    }
+}
+
+/// The condition on one side of the domain, applied to its boundary nodes and padding.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Side {
+    /// No condition: material that reaches this side leaves the domain (an error).
+    Open,
+    /// No-slip: both velocity components are zero.
+    Fixed,
+    /// Free slip: the normal velocity is zero, the tangential one free.
+    Roller,
+    /// Coulomb friction: material moving into the side is stopped, and its tangential
+    /// velocity is reduced by `friction` times the normal velocity removed; material
+    /// moving away separates freely (Bardenhagen et al. 2000 contact, grid form).
+    Frictional {
+        /// Coulomb friction coefficient μ = tan(wall friction angle).
+        friction: f64,
+    },
+}
+
+/// The four sides of the domain.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Boundaries {
+    /// x = 0.
+    pub left: Side,
+    /// x = width.
+    pub right: Side,
+    /// y = 0.
+    pub bottom: Side,
+    /// y = height.
+    pub top: Side,
+}
+
+/// Apply `side` to a velocity whose wall normal (pointing into the material) is axis
+/// `axis` (0 = x, 1 = y) with sign `into` (+1 for the left/bottom side). `v` is the new
+/// nodal velocity (m/s).
+#[inline(always)]
+pub fn apply_side(side: Side, axis: usize, into: f64, v: &mut [f64; 2]) {
+    let t = 1 - axis;
+    match side {
+        Side::Open => {}
+        Side::Fixed => *v = [0.0; 2],
+        Side::Roller => v[axis] = 0.0,
+        Side::Frictional { friction } => {
+            let vn = v[axis] * into; // > 0 when moving away from the wall
+            if vn < 0.0 {
+                v[axis] = 0.0;
+                // Coulomb: |Δv_t| ≤ μ |Δv_n| (Bardenhagen et al. 2000, eq. 12).
+                let dvt = friction * (-vn);
+                let vt = v[t];
+                v[t] = if vt.abs() <= dvt {
+                    0.0
+                } else {
+                    vt - dvt * vt.signum()
+                };
+            }
+        }
+    }
+}
+
+/// Node fields of the grid, column-major with padding (see [`GridSpec::node`]). Only the
+/// rows in `active[I]` of node column I hold values of the current step.
+#[derive(Debug, Clone, Default)]
+pub struct NodeFields {
+    /// Mass (kg/m).
+    pub mass: Vec<f64>,
+    /// Momentum (kg/s per metre).
+    pub mom: Vec<[f64; 2]>,
+    /// Internal plus external force (N/m).
+    pub force: Vec<[f64; 2]>,
+    /// Velocity before the update, boundary conditions applied (m/s).
+    pub v_old: Vec<[f64; 2]>,
+    /// Velocity after the update, boundary conditions applied (m/s).
+    pub v_new: Vec<[f64; 2]>,
+    /// Active node rows of each node column, `[first, end)` as storage offsets within the
+    /// column (row J at offset J + 1); empty when no point touches the column.
+    pub active: Vec<(u32, u32)>,
+}
+
+impl NodeFields {
+    /// Zeroed fields for `spec`.
+    pub fn new(spec: &GridSpec) -> Self {
+        let n = spec.rows() * spec.cols();
+        NodeFields {
+            mass: vec![0.0; n],
+            mom: vec![[0.0; 2]; n],
+            force: vec![[0.0; 2]; n],
+            v_old: vec![[0.0; 2]; n],
+            v_new: vec![[0.0; 2]; n],
+            active: vec![(0, 0); spec.cols()],
+        }
+    }
+
+    /// Mass and new velocity of every node, zero where inactive (for output).
+    pub fn snapshot(&self, spec: &GridSpec) -> (Vec<f64>, Vec<[f64; 2]>) {
+        let rows = spec.rows();
+        let mut m = vec![0.0; self.mass.len()];
+        let mut v = vec![[0.0; 2]; self.mass.len()];
+        for (col, &(a, b)) in self.active.iter().enumerate() {
+            for r in a as usize..b as usize {
+                let n = col * rows + r;
+                m[n] = self.mass[n];
+                v[n] = self.v_new[n];
+            }
+        }
+        (m, v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frictional_side_stops_and_brakes() {
+        let base = Side::Frictional { friction: 0.5 };
+        // Moving down at 2 m/s and sideways at 3 m/s: normal removed, tangential −0.5·2.
+        let mut v = [3.0, -2.0];
+        apply_side(base, 1, 1.0, &mut v);
+        assert_eq!(v, [2.0, 0.0]);
+        // Slow sideways motion sticks.
+        let mut v = [-0.5, -2.0];
+        apply_side(base, 1, 1.0, &mut v);
+        assert_eq!(v, [0.0, 0.0]);
+        // Moving away separates freely.
+        let mut v = [3.0, 1.0];
+        apply_side(base, 1, 1.0, &mut v);
+        assert_eq!(v, [3.0, 1.0]);
+        // Right wall (normal −x into the material): moving right is into the wall.
+        let mut v = [1.0, 4.0];
+        apply_side(Side::Frictional { friction: 1.0 }, 0, -1.0, &mut v);
+        assert_eq!(v, [0.0, 3.0]);
+        let mut v = [1.0, 4.0];
+        apply_side(Side::Roller, 0, -1.0, &mut v);
+        assert_eq!(v, [0.0, 4.0]);
+    }
+
+    #[test]
+    fn node_indexing_is_column_major_with_padding() {
+        let g = GridSpec {
+            nx: 4,
+            ny: 3,
+            h: 0.5,
+        };
+        assert_eq!(g.node(-1, -1), 0);
+        assert_eq!(g.node(-1, 4), 5);
+        assert_eq!(g.node(0, -1), 6);
+        assert_eq!(g.node(5, 4), g.rows() * g.cols() - 1);
+    }
+}

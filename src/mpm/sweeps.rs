@@ -1,0 +1,274 @@
+//! The node update and the two point sweeps (stress update, grid-to-particle). Each sweep
+//! is one parallel pass over its data; every point or node is written by one task only.
+
+use super::grid::{apply_side, Boundaries, GridSpec, NodeFields};
+use super::material::Material;
+use super::points::Points;
+use super::shape::{half_lengths, weights_1d, ShapeKind};
+use super::transfer::{slots, Columns};
+use rayon::prelude::*;
+
+/// Parameters of the node update.
+#[derive(Debug, Clone, Copy)]
+pub struct NodeUpdate {
+    /// Gravity (m/s²).
+    pub gravity: [f64; 2],
+    /// Time step (s).
+    pub dt: f64,
+    /// Cundall local damping coefficient α (0 = off).
+    pub damping: f64,
+    /// Nodes lighter than this (kg/m) are treated as empty.
+    pub min_mass: f64,
+}
+
+/// Apply the domain's boundary conditions to velocity `v` of node (i, j).
+#[inline(always)]
+fn constrain(b: &Boundaries, spec: &GridSpec, i: i64, j: i64, v: &mut [f64; 2]) {
+    if i <= 0 {
+        apply_side(b.left, 0, 1.0, v);
+    }
+    if i >= spec.nx as i64 {
+        apply_side(b.right, 0, -1.0, v);
+    }
+    if j <= 0 {
+        apply_side(b.bottom, 1, 1.0, v);
+    }
+    if j >= spec.ny as i64 {
+        apply_side(b.top, 1, -1.0, v);
+    }
+}
+
+/// Nodal velocities from momentum, `v_old = p/m` with boundary conditions, over the node
+/// columns `node_cols`; written to `v_old` (and `v_new` when `into_new`, used by MUSL's
+/// remapped velocity).
+pub fn velocities(
+    nodes: &mut NodeFields,
+    spec: &GridSpec,
+    b: &Boundaries,
+    min_mass: f64,
+    node_cols: std::ops::Range<i64>,
+    into_new: bool,
+) {
+    let rows = spec.rows();
+    let first = (node_cols.start + 1) as usize;
+    let range = first * rows..(first + (node_cols.end - node_cols.start) as usize) * rows;
+    let NodeFields {
+        mass,
+        mom,
+        v_old,
+        v_new,
+        active,
+        ..
+    } = nodes;
+    let target = if into_new { v_new } else { v_old };
+    (
+        mass[range.clone()].par_chunks(rows),
+        mom[range.clone()].par_chunks(rows),
+        target[range].par_chunks_mut(rows),
+    )
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(n, (m, p, v))| {
+            let i = node_cols.start + n as i64;
+            let (r0, r1) = active[first + n];
+            for r in r0 as usize..r1 as usize {
+                let mut vel = if m[r] > min_mass {
+                    [p[r][0] / m[r], p[r][1] / m[r]]
+                } else {
+                    [0.0; 2]
+                };
+                constrain(b, spec, i, r as i64 - 1, &mut vel);
+                v[r] = vel;
+            }
+        });
+}
+
+/// The momentum update on the nodes: `v_new = v_old + dt (f_int + m g + f_damp) / m`, then
+/// the boundary conditions. Requires `v_old` (from [`velocities`]) and the forces.
+pub fn update_nodes(
+    nodes: &mut NodeFields,
+    spec: &GridSpec,
+    b: &Boundaries,
+    u: &NodeUpdate,
+    node_cols: std::ops::Range<i64>,
+) {
+    let rows = spec.rows();
+    let first = (node_cols.start + 1) as usize;
+    let range = first * rows..(first + (node_cols.end - node_cols.start) as usize) * rows;
+    let NodeFields {
+        mass,
+        force,
+        v_old,
+        v_new,
+        active,
+        ..
+    } = nodes;
+    (
+        mass[range.clone()].par_chunks(rows),
+        force[range.clone()].par_chunks(rows),
+        v_old[range.clone()].par_chunks(rows),
+        v_new[range].par_chunks_mut(rows),
+    )
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(n, (m, f, vo, vn))| {
+            let i = node_cols.start + n as i64;
+            let (r0, r1) = active[first + n];
+            for r in r0 as usize..r1 as usize {
+                if !(m[r] > u.min_mass) {
+                    vn[r] = [0.0; 2];
+                    continue;
+                }
+                let mut v = vo[r];
+                for d in 0..2 {
+                    let mut f_d = f[r][d] + m[r] * u.gravity[d];
+                    // Cundall local damping: f −= α |f| sign(v) (Cundall 1987).
+                    if u.damping > 0.0 && v[d] != 0.0 {
+                        f_d -= u.damping * f_d.abs() * v[d].signum();
+                    }
+                    v[d] += u.dt * f_d / m[r];
+                }
+                constrain(b, spec, i, r as i64 - 1, &mut v);
+                vn[r] = v;
+            }
+        });
+}
+
+/// Interpolation context shared by the point sweeps.
+#[derive(Debug, Clone, Copy)]
+pub struct Interp<'a> {
+    /// Grid.
+    pub spec: &'a GridSpec,
+    /// Shape functions.
+    pub kind: ShapeKind,
+    /// Cells of the points.
+    pub columns: &'a Columns,
+}
+
+impl Interp<'_> {
+    /// Visit the nodes in the support of a point at `pos` in `cell` with initial
+    /// half-length `half0` and deformation gradient `f`: `visit(node, S, [∂S/∂x, ∂S/∂y])`.
+    #[inline(always)]
+    fn each_node(
+        &self,
+        pos: [f64; 2],
+        cell: [u32; 2],
+        half0: f64,
+        f: &[f64; 4],
+        mut visit: impl FnMut(usize, f64, [f64; 2]),
+    ) {
+        let h = self.spec.h;
+        let [c, r] = cell;
+        let half = half_lengths(self.kind, half0, f, h);
+        let wx = weights_1d(self.kind, pos[0], c as i64, h, half[0]);
+        let wy = weights_1d(self.kind, pos[1], r as i64, h, half[1]);
+        for kx in slots(self.kind) {
+            let col = self.spec.node(c as i64 - 1 + kx as i64, r as i64 - 1);
+            for ky in slots(self.kind) {
+                let w = wx.w[kx] * wy.w[ky];
+                visit(col + ky, w, [wx.g[kx] * wy.w[ky], wx.w[kx] * wy.g[ky]]);
+            }
+        }
+    }
+}
+
+/// Stress sweep: velocity gradient L = Σ v_I ⊗ ∇S_I from `v` (the scheme's nodal
+/// velocity), then the material update, deformation gradient F ← (I + L dt) F and the
+/// accumulated strain. Returns the number of points that yielded.
+pub fn update_stress(
+    points: &mut Points,
+    it: &Interp,
+    v: &[[f64; 2]],
+    materials: &[Material],
+    dt: f64,
+) -> usize {
+    let Points {
+        pos,
+        half0,
+        defgrad,
+        stress,
+        strain,
+        eps_p,
+        material,
+        ..
+    } = points;
+    (
+        pos.par_iter(),
+        half0.par_iter(),
+        it.columns.cell.par_iter(),
+        defgrad.par_iter_mut(),
+        stress.par_iter_mut(),
+        strain.par_iter_mut(),
+        eps_p.par_iter_mut(),
+        material.par_iter(),
+    )
+        .into_par_iter()
+        .map(|(&x, &h0, &cell, f, s, e, ep, &mat)| {
+            let mut l = [0.0; 4];
+            it.each_node(x, cell, h0, f, |n, _, g| {
+                let vn = v[n];
+                l[0] += vn[0] * g[0];
+                l[1] += vn[0] * g[1];
+                l[2] += vn[1] * g[0];
+                l[3] += vn[1] * g[1];
+            });
+            let (d, yielded) = materials[mat as usize].update(s, l, dt, ep);
+            e[0] += d[0];
+            e[1] += d[1];
+            e[2] += d[2];
+            // F_{n+1} = (I + L Δt) F_n.
+            let a = [1.0 + l[0] * dt, l[1] * dt, l[2] * dt, 1.0 + l[3] * dt];
+            *f = [
+                a[0] * f[0] + a[1] * f[2],
+                a[0] * f[1] + a[1] * f[3],
+                a[2] * f[0] + a[3] * f[2],
+                a[2] * f[1] + a[3] * f[3],
+            ];
+            yielded as usize
+        })
+        .sum()
+}
+
+/// Grid-to-particle sweep: FLIP velocity update blended with a fraction `pic` of the PIC
+/// velocity, and the position update x ← x + Δt Σ S v_new written to `pos_next`.
+pub fn grid_to_points(
+    points: &mut Points,
+    it: &Interp,
+    nodes: &NodeFields,
+    dt: f64,
+    pic: f64,
+    pos_next: &mut Vec<[f64; 2]>,
+) {
+    let Points {
+        pos,
+        half0,
+        defgrad,
+        vel,
+        ..
+    } = points;
+    pos_next.resize(pos.len(), [0.0; 2]);
+    (
+        pos.par_iter(),
+        half0.par_iter(),
+        defgrad.par_iter(),
+        it.columns.cell.par_iter(),
+        vel.par_iter_mut(),
+        pos_next.par_iter_mut(),
+    )
+        .into_par_iter()
+        .for_each(|(&x, &h0, f, &cell, v, xn)| {
+            let (mut dv, mut vp) = ([0.0; 2], [0.0; 2]);
+            it.each_node(x, cell, h0, f, |n, w, _| {
+                let (a, b) = (nodes.v_new[n], nodes.v_old[n]);
+                dv[0] += w * (a[0] - b[0]);
+                dv[1] += w * (a[1] - b[1]);
+                vp[0] += w * a[0];
+                vp[1] += w * a[1];
+            });
+            for d in 0..2 {
+                // FLIP: v_p += Σ S_I (v_I^new − v_I^old); PIC: v_p = Σ S_I v_I^new.
+                v[d] = (1.0 - pic) * (v[d] + dv[d]) + pic * vp[d];
+                xn[d] = x[d] + dt * vp[d];
+            }
+        });
+}

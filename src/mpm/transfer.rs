@@ -1,0 +1,197 @@
+//! Particle-to-grid transfer with a partition-independent summation order.
+//!
+//! Points are kept sorted by cell column, then cell row, then id. Each cell column `c`
+//! accumulates its points' contributions, in that order, into its own *strip*: the node
+//! columns `c-1 ..= c+2` over the node rows its points touch. A node's value is then the
+//! sum of the strips of the cell columns `I-2 ..= I+1`, added in ascending column order
+//! starting from zero. Every node sum therefore has the same operands in the same order
+//! whatever the thread count — and whatever the rank count, because slabs are whole cell
+//! columns and a strip is exchanged as it is, never pre-summed.
+
+use super::grid::{GridSpec, NodeFields};
+use super::points::Points;
+use super::shape::{half_lengths, weights_1d, ShapeKind};
+use rayon::prelude::*;
+
+/// Quantities one node slot accumulates: mass, momentum x/y, internal force x/y.
+pub const Q: usize = 5;
+
+/// What a particle-to-grid pass accumulates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum P2g {
+    /// Mass and momentum.
+    MassMomentum,
+    /// Internal force −V σ·∇S only (mass and momentum slots left zero).
+    Force,
+    /// All five quantities.
+    All,
+}
+
+/// One cell column's contributions: `data[(J - row_lo) * 4 + k]` holds the slot of node
+/// (c − 1 + k, J).
+#[derive(Debug, Clone, Default)]
+pub struct Strip {
+    /// Node row of the first entry.
+    pub row_lo: i64,
+    /// Number of node rows (0 when the column holds no point).
+    pub rows: usize,
+    /// The slots, row-major with four node columns per row.
+    pub data: Vec<[f64; Q]>,
+}
+
+/// Where each cell column's points start in the sorted point arrays.
+#[derive(Debug, Clone, Default)]
+pub struct Columns {
+    /// `start[c] .. start[c + 1]` are the points of cell column c (length nx + 1).
+    pub start: Vec<usize>,
+    /// Cell (column, row) of each point.
+    pub cell: Vec<[u32; 2]>,
+}
+
+/// The four node-column slots of a shape: linear functions use the middle two only.
+#[inline(always)]
+pub fn slots(kind: ShapeKind) -> std::ops::Range<usize> {
+    match kind {
+        ShapeKind::Linear => 1..3,
+        _ => 0..4,
+    }
+}
+
+/// Accumulate the strips of every cell column in `cols` (global indices) for `what`.
+/// Points must be sorted (see [`Columns`]); empty columns get an empty strip.
+pub fn particles_to_strips(
+    points: &Points,
+    columns: &Columns,
+    spec: &GridSpec,
+    kind: ShapeKind,
+    what: P2g,
+    strips: &mut [Strip],
+) {
+    let h = spec.h;
+    let ks = slots(kind);
+    let (pad_lo, pad_hi) = if kind == ShapeKind::Linear {
+        (0, 1)
+    } else {
+        (1, 2)
+    };
+    strips.par_iter_mut().enumerate().for_each(|(c, strip)| {
+        let (a, b) = (columns.start[c], columns.start[c + 1]);
+        if a == b {
+            strip.rows = 0;
+            strip.data.clear();
+            return;
+        }
+        let first = columns.cell[a][1] as i64;
+        let last = columns.cell[b - 1][1] as i64;
+        strip.row_lo = first - pad_lo;
+        strip.rows = (last + pad_hi - strip.row_lo + 1) as usize;
+        strip.data.clear();
+        strip.data.resize(strip.rows * 4, [0.0; Q]);
+        for p in a..b {
+            let [pc, pr] = columns.cell[p];
+            let [x, y] = points.pos[p];
+            let half = half_lengths(kind, points.half0[p], &points.defgrad[p], h);
+            let wx = weights_1d(kind, x, pc as i64, h, half[0]);
+            let wy = weights_1d(kind, y, pr as i64, h, half[1]);
+            let m = points.mass[p];
+            let [vx, vy] = points.vel[p];
+            let vol = points.volume(p);
+            let s = points.stress[p];
+            let base = (pr as i64 - 1 - strip.row_lo) as isize;
+            for ky in ks.clone() {
+                let row = (base + ky as isize) as usize * 4;
+                for kx in ks.clone() {
+                    let w = wx.w[kx] * wy.w[ky];
+                    let slot = &mut strip.data[row + kx];
+                    if what != P2g::Force {
+                        slot[0] += w * m;
+                        slot[1] += w * m * vx;
+                        slot[2] += w * m * vy;
+                    }
+                    if what != P2g::MassMomentum {
+                        let gx = wx.g[kx] * wy.w[ky];
+                        let gy = wx.w[kx] * wy.g[ky];
+                        // f_int = −Σ_p V_p σ_p · ∇S_Ip (Sulsky et al. 1994, eq. 23).
+                        slot[3] -= vol * (s[0] * gx + s[2] * gy);
+                        slot[4] -= vol * (s[2] * gx + s[1] * gy);
+                    }
+                }
+            }
+        }
+    });
+}
+
+/// Sum the strips into the node fields for the node columns `node_cols` (global node
+/// column indices, −1 ≤ I ≤ nx+1), in ascending cell-column order. `what` selects which
+/// node fields are (over)written; `active` is recomputed for mass passes.
+pub fn strips_to_nodes(
+    strips: &[Strip],
+    spec: &GridSpec,
+    what: P2g,
+    node_cols: std::ops::Range<i64>,
+    nodes: &mut NodeFields,
+) {
+    let rows = spec.rows();
+    let nx = spec.nx as i64;
+    let first = (node_cols.start + 1) as usize;
+    let count = (node_cols.end - node_cols.start) as usize;
+    let range = first * rows..(first + count) * rows;
+    let NodeFields {
+        mass,
+        mom,
+        force,
+        active,
+        ..
+    } = nodes;
+    (
+        mass[range.clone()].par_chunks_mut(rows),
+        mom[range.clone()].par_chunks_mut(rows),
+        force[range].par_chunks_mut(rows),
+        active[first..first + count].par_iter_mut(),
+    )
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(n, (mass, mom, force, act))| {
+            let i = node_cols.start + n as i64;
+            let cs = (i - 2).max(0)..=(i + 1).min(nx - 1);
+            let (mut lo, mut hi) = (i64::MAX, i64::MIN);
+            for c in cs.clone() {
+                let s = &strips[c as usize];
+                if s.rows > 0 {
+                    lo = lo.min(s.row_lo);
+                    hi = hi.max(s.row_lo + s.rows as i64);
+                }
+            }
+            if lo >= hi {
+                if what != P2g::Force {
+                    *act = (0, 0);
+                }
+                return;
+            }
+            let (r0, r1) = ((lo + 1) as usize, (hi + 1) as usize);
+            if what != P2g::Force {
+                *act = (r0 as u32, r1 as u32);
+            }
+            for r in r0..r1 {
+                let j = r as i64 - 1;
+                let mut acc = [0.0; Q];
+                for c in cs.clone() {
+                    let s = &strips[c as usize];
+                    let k = (i - c + 1) as usize;
+                    if j >= s.row_lo && j < s.row_lo + s.rows as i64 {
+                        let v = &s.data[(j - s.row_lo) as usize * 4 + k];
+                        for q in 0..Q {
+                            acc[q] += v[q];
+                        }
+                    }
+                }
+                if what != P2g::Force {
+                    mass[r] = acc[0];
+                    mom[r] = [acc[1], acc[2]];
+                }
+                if what != P2g::MassMomentum {
+                    force[r] = [acc[3], acc[4]];
+                }
+            }
+        });
+}
