@@ -1,7 +1,7 @@
 //! Materials of material points: one enum, one stress update. The objective (Jaumann)
 //! rotation is applied here, before the constitutive update, for every model.
 
-use super::mohr_coulomb::MohrCoulomb;
+use super::mohr_coulomb::{MohrCoulomb, Prepared};
 
 /// A material: its density and constitutive model.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,13 +59,33 @@ impl Material {
         (self.p_wave_modulus() / self.density).sqrt()
     }
 
+    /// Run constants of the material (see [`Material::update`]).
+    pub fn prepare(&self) -> Prepared {
+        match &self.model {
+            Model::MohrCoulomb(mc) => mc.prepare(),
+            Model::LinearElastic {
+                youngs_modulus_pa,
+                poisson_ratio,
+            } => {
+                let (lam, g) = lame(*youngs_modulus_pa, *poisson_ratio);
+                Prepared {
+                    lam,
+                    g,
+                    sin_phi: 0.0,
+                    cos_phi: 1.0,
+                }
+            }
+        }
+    }
+
     /// Advance `stress` by the velocity gradient `l` = [∂vx/∂x, ∂vx/∂y, ∂vy/∂x, ∂vy/∂y]
     /// (1/s) over `dt` (s): Jaumann rotation, then the model's update with the strain
     /// increment sym(L) dt. Returns the strain increment [Δεxx, Δεyy, Δεxy] and whether
-    /// the point yielded; `eps_p` accumulates plastic strain.
+    /// the point yielded; `eps_p` accumulates plastic strain. `k` is [`Material::prepare`].
     #[inline]
     pub fn update(
         &self,
+        k: &Prepared,
         stress: &mut [f64; 4],
         l: [f64; 4],
         dt: f64,
@@ -79,11 +99,8 @@ impl Material {
         stress[1] -= 2.0 * w * sxy;
         stress[2] += w * (syy - sxx);
         let yielded = match &self.model {
-            Model::LinearElastic {
-                youngs_modulus_pa,
-                poisson_ratio,
-            } => {
-                let (lam, g) = lame(*youngs_modulus_pa, *poisson_ratio);
+            Model::LinearElastic { .. } => {
+                let (lam, g) = (k.lam, k.g);
                 let tr = d[0] + d[1];
                 // Hooke, plane strain: Δσ = λ tr(Δε) I + 2G Δε, Δε_zz = 0.
                 stress[0] += lam * tr + 2.0 * g * d[0];
@@ -92,7 +109,7 @@ impl Material {
                 stress[3] += lam * tr;
                 false
             }
-            Model::MohrCoulomb(mc) => mc.update(stress, d, eps_p).yielded,
+            Model::MohrCoulomb(mc) => mc.update_prepared(k, stress, d, eps_p).yielded,
         };
         (d, yielded)
     }
@@ -116,7 +133,7 @@ mod tests {
         let (omega, dt, s) = (2.0, 1e-4, -1000.0);
         let mut st = [s, 0.0, 0.0, 0.0];
         let mut ep = 0.0;
-        let (d, _) = m.update(&mut st, [0.0, -omega, omega, 0.0], dt, &mut ep);
+        let (d, _) = m.update(&m.prepare(), &mut st, [0.0, -omega, omega, 0.0], dt, &mut ep);
         assert_eq!(d, [0.0, 0.0, 0.0]);
         assert!((st[2] - s * omega * dt).abs() < 1e-12, "{st:?}");
         assert_eq!(st[0], s);
@@ -133,7 +150,7 @@ mod tests {
         };
         let mut st = [0.0; 4];
         let mut ep = 0.0;
-        m.update(&mut st, [1e-3, 0.0, 0.0, 0.0], 1.0, &mut ep);
+        m.update(&m.prepare(), &mut st, [1e-3, 0.0, 0.0, 0.0], 1.0, &mut ep);
         // λ = 0.4 MPa, G = 0.4 MPa: σxx = (λ+2G) ε = 1200 Pa, σyy = σzz = λ ε = 400 Pa.
         assert!((st[0] - 1200.0).abs() < 1e-9 && (st[1] - 400.0).abs() < 1e-9);
         assert!((st[3] - 400.0).abs() < 1e-9 && st[2] == 0.0);

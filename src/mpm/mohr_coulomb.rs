@@ -44,6 +44,20 @@ pub struct MohrCoulomb {
     pub softening: Option<Softening>,
 }
 
+/// Run constants of a [`MohrCoulomb`] material: Lamé parameters (Pa) and the sine and
+/// cosine of the peak friction angle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prepared {
+    /// λ (Pa).
+    pub lam: f64,
+    /// G (Pa).
+    pub g: f64,
+    /// sin φ_peak.
+    pub sin_phi: f64,
+    /// cos φ_peak.
+    pub cos_phi: f64,
+}
+
 /// What one update did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Outcome {
@@ -318,7 +332,31 @@ impl MohrCoulomb {
     /// passes; `eps_p` grows by exactly the Δε_p of the final strength, so the result is
     /// admissible at `strength_at(*eps_p)` (f ≈ 0 there when it yielded in shear).
     pub fn update(&self, stress: &mut [f64; 4], d_eps: [f64; 3], eps_p: &mut f64) -> Outcome {
+        self.update_prepared(&self.prepare(), stress, d_eps, eps_p)
+    }
+
+    /// The constants [`MohrCoulomb::update_prepared`] needs, computed once per run.
+    pub fn prepare(&self) -> Prepared {
         let (lam, g) = lame(self.youngs_modulus_pa, self.poisson_ratio);
+        let (sin_phi, cos_phi) = self.friction_deg.to_radians().sin_cos();
+        Prepared {
+            lam,
+            g,
+            sin_phi,
+            cos_phi,
+        }
+    }
+
+    /// [`MohrCoulomb::update`] with the constants of [`MohrCoulomb::prepare`] (same result
+    /// bits; saves the divisions and the sine of the elastic fast path).
+    pub fn update_prepared(
+        &self,
+        k: &Prepared,
+        stress: &mut [f64; 4],
+        d_eps: [f64; 3],
+        eps_p: &mut f64,
+    ) -> Outcome {
+        let (lam, g) = (k.lam, k.g);
         let tr = d_eps[0] + d_eps[1];
         // Hooke, plane strain: Δσ = λ tr(Δε) I + 2G Δε, Δεzz = 0.
         stress[0] += lam * tr + 2.0 * g * d_eps[0];
@@ -330,8 +368,16 @@ impl MohrCoulomb {
         let eps_n = *eps_p;
         let p = principal(stress);
         let t = p.s;
-        let (phi, c) = self.strength_at(eps_n);
-        let (sp, cp) = phi.to_radians().sin_cos();
+        let peak = self
+            .softening
+            .is_none_or(|sw| eps_n <= sw.plastic_strain_start);
+        let (c, sp, cp) = if peak {
+            (self.cohesion_pa, k.sin_phi, k.cos_phi)
+        } else {
+            let (phi, c) = self.strength_at(eps_n);
+            let (sp, cp) = phi.to_radians().sin_cos();
+            (c, sp, cp)
+        };
         let tol = 1e-12 * (t[0].abs() + t[1].abs() + t[2].abs() + 2.0 * c.abs() * cp);
         // Same Mohr–Coulomb f as `yield_value`.
         let f = (t[0] - t[2]) + (t[0] + t[2]) * sp - 2.0 * c * cp;

@@ -16,9 +16,15 @@ pub enum ShapeKind {
     CpGimp,
 }
 
-/// Weights and gradients of one point in one direction for node slots `c-1 ..= c+2`.
+/// Weights and gradients of one point in one direction. Slot `k` is node `c − 1 + k`;
+/// only the slots `first .. first + count` can be non-zero (3 for GIMP, whose half-length
+/// ≤ h/2 reaches at most one of the outer nodes; 2 for linear shapes).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Weights1d {
+    /// First slot that may be non-zero.
+    pub first: usize,
+    /// Number of slots from `first`.
+    pub count: usize,
     /// S(x_I) for the four slots.
     pub w: [f64; 4],
     /// dS/dx (1/m) for the four slots.
@@ -36,14 +42,20 @@ pub fn weights_1d(kind: ShapeKind, x: f64, cell: i64, h: f64, half: f64) -> Weig
         ShapeKind::Linear => {
             // Tent functions N_I = 1 − |x − x_I| / h (Sulsky et al. 1994).
             let xi = x * inv_h - cell as f64;
+            out.first = 1;
+            out.count = 2;
             out.w[1] = 1.0 - xi;
             out.w[2] = xi;
             out.g[1] = -inv_h;
             out.g[2] = inv_h;
         }
         ShapeKind::Gimp | ShapeKind::CpGimp => {
-            for k in 0..4 {
-                let node = (cell - 1 + k as i64) as f64 * h;
+            let base = cell as f64 * h;
+            // Node c − 1 is reached only when the point is within `half` of node c.
+            out.first = if x - base < half { 0 } else { 1 };
+            out.count = 3;
+            for k in out.first..out.first + 3 {
+                let node = base + (k as f64 - 1.0) * h;
                 let (w, g) = gimp(x - node, h, half);
                 out.w[k] = w;
                 out.g[k] = g;

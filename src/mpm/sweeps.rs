@@ -3,9 +3,10 @@
 
 use super::grid::{apply_side, Boundaries, GridSpec, NodeFields};
 use super::material::Material;
+use super::mohr_coulomb::Prepared;
 use super::points::Points;
 use super::shape::{half_lengths, weights_1d, ShapeKind};
-use super::transfer::{slots, Columns};
+use super::transfer::Columns;
 use rayon::prelude::*;
 
 /// Parameters of the node update.
@@ -162,9 +163,9 @@ impl Interp<'_> {
         let half = half_lengths(self.kind, half0, f, h);
         let wx = weights_1d(self.kind, pos[0], c as i64, h, half[0]);
         let wy = weights_1d(self.kind, pos[1], r as i64, h, half[1]);
-        for kx in slots(self.kind) {
+        for kx in wx.first..wx.first + wx.count {
             let col = self.spec.node(c as i64 - 1 + kx as i64, r as i64 - 1);
-            for ky in slots(self.kind) {
+            for ky in wy.first..wy.first + wy.count {
                 let w = wx.w[kx] * wy.w[ky];
                 visit(col + ky, w, [wx.g[kx] * wy.w[ky], wx.w[kx] * wy.g[ky]]);
             }
@@ -180,6 +181,7 @@ pub fn update_stress(
     it: &Interp,
     v: &[[f64; 2]],
     materials: &[Material],
+    prepared: &[Prepared],
     dt: f64,
 ) -> usize {
     let Points {
@@ -212,7 +214,7 @@ pub fn update_stress(
                 l[2] += vn[1] * g[0];
                 l[3] += vn[1] * g[1];
             });
-            let (d, yielded) = materials[mat as usize].update(s, l, dt, ep);
+            let (d, yielded) = materials[mat as usize].update(&prepared[mat as usize], s, l, dt, ep);
             e[0] += d[0];
             e[1] += d[1];
             e[2] += d[2];

@@ -3,7 +3,8 @@
 
 use super::grid::{Boundaries, GridSpec, NodeFields};
 use super::material::Material;
-use super::order::{sort_points, OrderScratch};
+use super::mohr_coulomb::Prepared;
+use super::order::{sort_points, OrderScratch, REORDER_EVERY};
 use super::points::Points;
 use super::shape::ShapeKind;
 use super::sweeps::{grid_to_points, update_nodes, update_stress, velocities, Interp, NodeUpdate};
@@ -94,6 +95,7 @@ pub struct MpmSystem {
     strips: Vec<Strip>,
     scratch: OrderScratch,
     pos_next: Vec<[f64; 2]>,
+    prepared: Vec<Prepared>,
     min_mass: f64,
     /// Simulated time (s).
     pub time: f64,
@@ -103,8 +105,6 @@ pub struct MpmSystem {
     pub seconds: [f64; 5],
     /// Points that yielded in the last stress update.
     pub yielded: usize,
-    /// Steps in which the points were re-sorted.
-    pub resorts: u64,
 }
 
 impl MpmSystem {
@@ -117,6 +117,7 @@ impl MpmSystem {
             0.0
         };
         MpmSystem {
+            prepared: setup.materials.iter().map(|m| m.prepare()).collect(),
             nodes: NodeFields::new(&setup.spec),
             strips: vec![Strip::default(); setup.spec.nx],
             setup,
@@ -129,7 +130,6 @@ impl MpmSystem {
             steps: 0,
             seconds: [0.0; 5],
             yielded: 0,
-            resorts: 0,
         }
     }
 
@@ -169,13 +169,10 @@ impl MpmSystem {
             t = Instant::now();
         };
         let spec = self.setup.spec;
-        match sort_points(
-            &mut self.points,
-            &spec,
-            &mut self.columns,
-            &mut self.scratch,
-        ) {
-            Ok(permuted) => self.resorts += permuted as u64,
+        let reorder = self.steps % REORDER_EVERY == 0;
+        let (points, columns) = (&mut self.points, &mut self.columns);
+        match sort_points(points, &spec, columns, &mut self.scratch, reorder) {
+            Ok(()) => {}
             Err(o) if o.pos[0].is_finite() && o.pos[1].is_finite() => {
                 return Err(MpmError::LeftDomain {
                     step: self.steps,
@@ -280,6 +277,7 @@ impl MpmSystem {
             &it,
             v,
             &self.setup.materials,
+            &self.prepared,
             self.setup.dt,
         );
     }

@@ -39,26 +39,19 @@ pub struct Strip {
     pub data: Vec<[f64; Q]>,
 }
 
-/// Where each cell column's points start in the sorted point arrays.
+/// The canonical order of the points and where each cell column starts in it.
 #[derive(Debug, Clone, Default)]
 pub struct Columns {
-    /// `start[c] .. start[c + 1]` are the points of cell column c (length nx + 1).
+    /// `order[start[c] .. start[c + 1]]` are the points of cell column c (length nx + 1).
     pub start: Vec<usize>,
-    /// Cell (column, row) of each point.
+    /// Cell (column, row) of each point, by storage index.
     pub cell: Vec<[u32; 2]>,
+    /// Storage indices in canonical order: column, row, id.
+    pub order: Vec<u32>,
 }
 
-/// The four node-column slots of a shape: linear functions use the middle two only.
-#[inline(always)]
-pub fn slots(kind: ShapeKind) -> std::ops::Range<usize> {
-    match kind {
-        ShapeKind::Linear => 1..3,
-        _ => 0..4,
-    }
-}
-
-/// Accumulate the strips of every cell column in `cols` (global indices) for `what`.
-/// Points must be sorted (see [`Columns`]); empty columns get an empty strip.
+/// Accumulate the strips of every cell column for `what`, from the points in canonical
+/// order (see [`Columns`]); empty columns get an empty strip.
 pub fn particles_to_strips(
     points: &Points,
     columns: &Columns,
@@ -67,58 +60,73 @@ pub fn particles_to_strips(
     what: P2g,
     strips: &mut [Strip],
 ) {
-    let h = spec.h;
-    let ks = slots(kind);
-    let (pad_lo, pad_hi) = if kind == ShapeKind::Linear {
-        (0, 1)
-    } else {
-        (1, 2)
-    };
+    let (pad_lo, pad_hi) = if kind == ShapeKind::Linear { (0, 1) } else { (1, 2) };
     strips.par_iter_mut().enumerate().for_each(|(c, strip)| {
-        let (a, b) = (columns.start[c], columns.start[c + 1]);
-        if a == b {
+        let list = &columns.order[columns.start[c]..columns.start[c + 1]];
+        let (Some(&first), Some(&last)) = (list.first(), list.last()) else {
             strip.rows = 0;
             strip.data.clear();
             return;
-        }
-        let first = columns.cell[a][1] as i64;
-        let last = columns.cell[b - 1][1] as i64;
-        strip.row_lo = first - pad_lo;
-        strip.rows = (last + pad_hi - strip.row_lo + 1) as usize;
+        };
+        strip.row_lo = columns.cell[first as usize][1] as i64 - pad_lo;
+        strip.rows = (columns.cell[last as usize][1] as i64 + pad_hi - strip.row_lo + 1) as usize;
         strip.data.clear();
         strip.data.resize(strip.rows * 4, [0.0; Q]);
-        for p in a..b {
-            let [pc, pr] = columns.cell[p];
-            let [x, y] = points.pos[p];
-            let half = half_lengths(kind, points.half0[p], &points.defgrad[p], h);
-            let wx = weights_1d(kind, x, pc as i64, h, half[0]);
-            let wy = weights_1d(kind, y, pr as i64, h, half[1]);
-            let m = points.mass[p];
-            let [vx, vy] = points.vel[p];
-            let vol = points.volume(p);
-            let s = points.stress[p];
-            let base = (pr as i64 - 1 - strip.row_lo) as isize;
-            for ky in ks.clone() {
-                let row = (base + ky as isize) as usize * 4;
-                for kx in ks.clone() {
-                    let w = wx.w[kx] * wy.w[ky];
-                    let slot = &mut strip.data[row + kx];
-                    if what != P2g::Force {
-                        slot[0] += w * m;
-                        slot[1] += w * m * vx;
-                        slot[2] += w * m * vy;
-                    }
-                    if what != P2g::MassMomentum {
-                        let gx = wx.g[kx] * wy.w[ky];
-                        let gy = wx.w[kx] * wy.g[ky];
-                        // f_int = −Σ_p V_p σ_p · ∇S_Ip (Sulsky et al. 1994, eq. 23).
-                        slot[3] -= vol * (s[0] * gx + s[2] * gy);
-                        slot[4] -= vol * (s[2] * gx + s[1] * gy);
-                    }
+        match what {
+            P2g::MassMomentum => accumulate::<true, false>(points, columns, spec, kind, list, strip),
+            P2g::Force => accumulate::<false, true>(points, columns, spec, kind, list, strip),
+            P2g::All => accumulate::<true, true>(points, columns, spec, kind, list, strip),
+        }
+    });
+}
+
+/// Add the contributions of the points `list` (one cell column, canonical order) to
+/// `strip`: mass and momentum when `MASS`, internal force when `FORCE`.
+#[inline(always)]
+fn accumulate<const MASS: bool, const FORCE: bool>(
+    points: &Points,
+    columns: &Columns,
+    spec: &GridSpec,
+    kind: ShapeKind,
+    list: &[u32],
+    strip: &mut Strip,
+) {
+    let h = spec.h;
+    for &p in list {
+        let p = p as usize;
+        let [pc, pr] = columns.cell[p];
+        let [x, y] = points.pos[p];
+        let half = half_lengths(kind, points.half0[p], &points.defgrad[p], h);
+        let wx = weights_1d(kind, x, pc as i64, h, half[0]);
+        let wy = weights_1d(kind, y, pr as i64, h, half[1]);
+        let m = points.mass[p];
+        let [vx, vy] = points.vel[p];
+        let (vol, s) = if FORCE {
+            (points.volume(p), points.stress[p])
+        } else {
+            (0.0, [0.0; 4])
+        };
+        let base = (pr as i64 - 1 - strip.row_lo) as usize;
+        for ky in wy.first..wy.first + wy.count {
+            let row = (base + ky) * 4;
+            for kx in wx.first..wx.first + wx.count {
+                let slot = &mut strip.data[row + kx];
+                if MASS {
+                    let wm = wx.w[kx] * wy.w[ky] * m;
+                    slot[0] += wm;
+                    slot[1] += wm * vx;
+                    slot[2] += wm * vy;
+                }
+                if FORCE {
+                    let gx = wx.g[kx] * wy.w[ky];
+                    let gy = wx.w[kx] * wy.g[ky];
+                    // f_int = −Σ_p V_p σ_p · ∇S_Ip (Sulsky et al. 1994, eq. 23).
+                    slot[3] -= vol * (s[0] * gx + s[2] * gy);
+                    slot[4] -= vol * (s[2] * gx + s[1] * gy);
                 }
             }
         }
-    });
+    }
 }
 
 /// Sum the strips into the node fields for the node columns `node_cols` (global node

@@ -1,0 +1,105 @@
+//! MPM throughput in particle-steps per second, with the split over the stages.
+//!
+//! The problem of the CB-Geo bar: a granular column collapse of aspect ratio 2
+//! with 2 × 2 points per 1 cm cell (180 000 points: 150 × 300 cells), Mohr–Coulomb
+//! (φ = 30°, E = 1 MPa), USF, GIMP and linear shape functions, on 1 and 2 threads; then
+//! 10⁶ points (500 × 500 cells) on 1 and 2 threads. The column collapses during the timed
+//! steps, so the points move, re-sort and yield as in a production run.
+//! `cargo bench --bench mpm_points` (GRAINFLOW_BENCH_STEPS, default 300; GRAINFLOW_BENCH_ONLY
+//! = `cbgeo` or `million` for one part).
+use grainflow::mpm::mohr_coulomb::MohrCoulomb;
+use grainflow::mpm::*;
+use std::time::Instant;
+
+fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> MpmSystem {
+    let h = 0.01;
+    let spec = GridSpec { nx: cells_x * 4, ny: cells_y + 8, h };
+    let mat = Material {
+        density: 1800.0,
+        model: Model::MohrCoulomb(MohrCoulomb {
+            youngs_modulus_pa: 1.0e6,
+            poisson_ratio: 0.3,
+            friction_deg: 30.0,
+            dilation_deg: 0.0,
+            cohesion_pa: 0.0,
+            tension_cutoff_pa: 0.0,
+            softening: None,
+        }),
+    };
+    let setup = MpmSetup {
+        spec,
+        shape,
+        scheme,
+        boundaries: Boundaries {
+            left: Side::Roller,
+            right: Side::Roller,
+            bottom: Side::Frictional { friction: 0.46 },
+            top: Side::Open,
+        },
+        gravity: [0.0, -9.81],
+        dt: 0.5 * critical_dt(&[mat], h),
+        damping: 0.0,
+        pic: 0.0,
+        materials: vec![mat],
+    };
+    let mut pts = Points::default();
+    let (w, ht) = (cells_x as f64 * h, cells_y as f64 * h);
+    let mut id = 0;
+    fill(&mut pts, &Shape::Rectangle { min: [0.0, 0.0], max: [w, ht] }, &spec, 2, 1800.0, 0, &mut id);
+    for i in 0..pts.len() {
+        let syy = -1800.0 * 9.81 * (ht - pts.pos[i][1]);
+        pts.stress[i] = [0.5 * syy, syy, 0.0, 0.5 * syy];
+    }
+    MpmSystem::new(setup, pts)
+}
+
+fn run(cx: usize, cy: usize, shape: ShapeKind, scheme: Scheme, threads: usize, steps: usize) {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| {
+        let mut s = column(cx, cy, shape, scheme);
+        let n = s.points.len();
+        for _ in 0..20 {
+            s.step().unwrap();
+        }
+        s.seconds = [0.0; 5];
+        let t = Instant::now();
+        for _ in 0..steps {
+            s.step().unwrap();
+        }
+        let secs = t.elapsed().as_secs_f64();
+        let split: Vec<String> = MPM_STAGES
+            .iter()
+            .zip(s.seconds)
+            .map(|(k, v)| format!("{k} {:.0} %", 100.0 * v / secs))
+            .collect();
+        println!(
+            "{n:>8} points {shape:?} {scheme:?} {threads} thread(s): {:.3e} particle-steps/s ({:.0} ns per point-step); {}; yielded {}",
+            (n * steps) as f64 / secs,
+            secs / (n * steps) as f64 * 1e9 * threads as f64,
+            split.join(", "),
+            s.yielded
+        );
+    });
+}
+
+fn main() {
+    let steps: usize = std::env::var("GRAINFLOW_BENCH_STEPS").ok().and_then(|v| v.parse().ok()).unwrap_or(300);
+    let only = std::env::var("GRAINFLOW_BENCH_ONLY").unwrap_or_default();
+    if only.is_empty() || only == "cbgeo" {
+        println!("CB-Geo problem: a = 2 column, 150 × 300 cells of 1 cm, 2 × 2 points per cell (bar: 3.1e5 / 4.8e5 GIMP, 4.9e5 linear on 1 thread)");
+        for shape in [ShapeKind::Gimp, ShapeKind::Linear] {
+            for threads in [1, 2] {
+                run(150, 300, shape, Scheme::Usf, threads, steps);
+            }
+        }
+        for scheme in [Scheme::Usl, Scheme::Musl] {
+            run(150, 300, ShapeKind::Gimp, scheme, 1, steps);
+        }
+    }
+    if only.is_empty() || only == "million" {
+        println!("10⁶ points: 500 × 500 cells of 1 cm, 2 × 2 points per cell, GIMP, USF");
+        for threads in [1, 2] {
+            run(500, 500, ShapeKind::Gimp, Scheme::Usf, threads, steps / 3);
+        }
+    }
+}
