@@ -8,6 +8,7 @@
 //! `cargo bench --bench mpm_points` (GRAINFLOW_BENCH_STEPS, default 300; GRAINFLOW_BENCH_ONLY
 //! = `cbgeo` or `million` for one part).
 use grainflow::mpm::mohr_coulomb::MohrCoulomb;
+use decomposition::SingleProcess;
 use grainflow::mpm::*;
 use std::time::Instant;
 
@@ -16,6 +17,7 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
     let spec = GridSpec { nx: cells_x * 4, ny: cells_y + 8, h };
     let mat = Material {
         density: 1800.0,
+        separation_volume_ratio: f64::INFINITY,
         model: Model::MohrCoulomb(MohrCoulomb {
             youngs_modulus_pa: 1.0e6,
             poisson_ratio: 0.3,
@@ -40,6 +42,7 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
         dt: 0.5 * critical_dt(&[mat], h),
         damping: 0.0,
         pic: 0.0,
+        volumetric_averaging: false,
         materials: vec![mat],
     };
     let mut pts = Points::default();
@@ -50,21 +53,21 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
         let syy = -1800.0 * 9.81 * (ht - pts.pos[i][1]);
         pts.stress[i] = [0.5 * syy, syy, 0.0, 0.5 * syy];
     }
-    MpmSystem::new(setup, pts)
+    MpmSystem::new(setup, pts, &SingleProcess).unwrap()
 }
 
 fn run(cx: usize, cy: usize, shape: ShapeKind, scheme: Scheme, threads: usize, steps: usize) {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap(, &SingleProcess).expect("system");
     pool.install(|| {
         let mut s = column(cx, cy, shape, scheme);
         let n = s.points.len();
         for _ in 0..20 {
-            s.step().unwrap();
+            s.step(&SingleProcess).unwrap();
         }
-        s.seconds = [0.0; 5];
+        s.seconds = [0.0; 6];
         let t = Instant::now();
         for _ in 0..steps {
-            s.step().unwrap();
+            s.step(&SingleProcess).unwrap();
         }
         let secs = t.elapsed().as_secs_f64();
         let split: Vec<String> = MPM_STAGES

@@ -17,5 +17,6 @@ pub mod mpm;
 pub mod progress;
 pub mod run;
 pub mod run_grains;
+pub mod run_mpm;
 pub mod scene;
 pub mod simulation;

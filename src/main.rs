@@ -387,11 +387,65 @@ fn print_check(s: &scene::ValidScene) {
 }
 
 fn run_mpm_scene(
-    _m: &scene::ValidMpmScene,
-    _out: std::path::PathBuf,
-    _progress: bool,
-    _restart: Option<std::path::PathBuf>,
-    _comm: &dyn decomposition::Comm,
+    m: &scene::ValidMpmScene,
+    out: std::path::PathBuf,
+    progress: bool,
+    restart: Option<std::path::PathBuf>,
+    comm: &dyn decomposition::Comm,
 ) -> Result<i32> {
-    anyhow::bail!("MPM runs are not wired yet")
+    if comm.is_root() {
+        for w in &m.warnings {
+            eprintln!("warning: {w}");
+        }
+        eprintln!(
+            "running MPM scene {} on {} rank(s) × {} threads",
+            m.path.display(),
+            comm.size(),
+            rayon::current_num_threads()
+        );
+    }
+    let opts = RunOptions {
+        out_dir: out.clone(),
+        precision: None,
+        backend: None,
+        gpu_storage: None,
+        steps: None,
+        progress,
+        restart,
+    };
+    let summary = grainflow::run_mpm::run_mpm(m, &opts, comm)?;
+    if !comm.is_root() {
+        return Ok(exit_code(summary.status));
+    }
+    println!(
+        "{} material points, {} steps (Δt = {:.3e} s, CFL limit {:.3e} s) in {:.2} s: {:.2} M point-steps/s, {} migrated",
+        summary.points,
+        summary.steps,
+        summary.time_step_s,
+        summary.critical_time_step_s,
+        summary.wall_time_s,
+        summary.point_steps_per_s / 1e6,
+        summary.migrated
+    );
+    for (k, v) in &summary.results {
+        println!("  {k} = {v:.6e}");
+    }
+    print_checks(&summary.checks);
+    println!(
+        "output: {}  (summary.json, mpm.h5 + mpm.xdmf, pictures/)",
+        out.display()
+    );
+    if let Some(e) = &summary.error {
+        eprintln!("error: {e}");
+    }
+    match summary.status {
+        Status::ChecksFailed => eprintln!("error: at least one check failed"),
+        Status::Interrupted => eprintln!(
+            "stopped by SIGTERM at step {}; continue with --restart {}",
+            summary.steps,
+            out.join("checkpoint.h5").display()
+        ),
+        _ => {}
+    }
+    Ok(exit_code(summary.status))
 }

@@ -60,6 +60,39 @@ pub enum RunError {
     /// The grains could not be set up.
     #[error(transparent)]
     Dem(#[from] crate::dem::DemError),
+    /// The material points could not be set up.
+    #[error(transparent)]
+    Mpm(#[from] crate::mpm::MpmError),
+}
+
+/// Per-stage statistics over the ranks from each rank's `local` seconds (in the order of
+/// `names`), and the slowest rank's seconds per stage. Collective.
+pub fn stage_stats(
+    names: &[&'static str],
+    local: &[f64],
+    comm: &dyn Comm,
+) -> (BTreeMap<&'static str, StageStats>, BTreeMap<&'static str, f64>) {
+    let all = comm.all_gather_f64(local);
+    let ranks = comm.size();
+    let mut stages = BTreeMap::new();
+    let mut slowest = BTreeMap::new();
+    for (k, name) in names.iter().enumerate() {
+        let v: Vec<f64> = (0..ranks).map(|r| all[r * names.len() + k]).collect();
+        let sum: f64 = v.iter().sum();
+        let max = v.iter().cloned().fold(0.0, f64::max);
+        let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
+        stages.insert(
+            *name,
+            StageStats {
+                sum_s: sum,
+                max_s: max,
+                min_s: min,
+                mean_s: sum / ranks as f64,
+            },
+        );
+        slowest.insert(*name, max);
+    }
+    (stages, slowest)
 }
 
 /// How a run ended.

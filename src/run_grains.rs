@@ -10,7 +10,7 @@ use crate::io::atomic::{ensure_writable_dir, write_atomic};
 use crate::io::grains_checkpoint::{self, apply_walls, GrainRunState};
 use crate::io::grains_out::{write_grains_png, GrainWriter};
 use crate::progress::Progress;
-use crate::run::{RunError, RunOptions, StageStats, Status};
+use crate::run::{stage_stats, RunError, RunOptions, StageStats, Status};
 use crate::scene::{GrainAnalysis, GrainScene, ValidGrainScene};
 use decomposition::Comm;
 use serde::Serialize;
@@ -301,28 +301,8 @@ pub fn run_grains(
     if status == Status::Ok && checks.iter().any(|c| !c.passed) {
         status = Status::ChecksFailed;
     }
-    let all = comm.all_gather_f64(&stage);
     let ranks = comm.size();
-    let mut stages = BTreeMap::new();
-    let mut stage_seconds = BTreeMap::new();
-    for (k, name) in GRAIN_STAGES.iter().enumerate() {
-        let v: Vec<f64> = (0..ranks)
-            .map(|r| all[r * GRAIN_STAGES.len() + k])
-            .collect();
-        let sum: f64 = v.iter().sum();
-        let max = v.iter().cloned().fold(0.0, f64::max);
-        let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
-        stages.insert(
-            *name,
-            StageStats {
-                sum_s: sum,
-                max_s: max,
-                min_s: min,
-                mean_s: sum / ranks as f64,
-            },
-        );
-        stage_seconds.insert(*name, max);
-    }
+    let (stages, stage_seconds) = stage_stats(&GRAIN_STAGES, &stage, comm);
     let (ke, momentum, _) = global_state(&d, comm);
     let mut counts = [
         d.migrated as f64,

@@ -8,13 +8,17 @@
 //!   per-column cost, with owner look-ups and global ↔ local index maps.
 //! * [`SlabHalo`]: the two-face halo exchange of a slab: one contiguous buffer per
 //!   neighbour, non-blocking, with work overlapped while the messages travel.
+//! * [`swap_neighbours`], [`swap_neighbours_varlen`]: one message per neighbour for
+//!   particle solvers (ghosts, migration, MPM grid strips).
 
 mod comm;
 mod halo;
 mod mpi_comm;
+mod neighbours;
 mod slab;
 
 pub use comm::{ordered_sum, Comm, Incoming, Outgoing, SingleProcess};
 pub use halo::{Side, SlabHalo};
 pub use mpi_comm::{launched_by_mpi, MpiComm, RawComm};
+pub use neighbours::{swap_neighbours, swap_neighbours_varlen};
 pub use slab::{PartitionError, Slab, SlabPartition};

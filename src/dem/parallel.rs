@@ -27,7 +27,8 @@ const TAG_FORWARD: u16 = 220;
 
 mod migration;
 
-use migration::{join, split, swap};
+use decomposition::swap_neighbours as swap;
+use migration::{join, split};
 
 /// One rank's share of a distributed DEM system.
 #[derive(Debug)]

@@ -7,7 +7,7 @@
 //! forces a restarted run continues bit for bit.
 
 use super::checkpoint::write_atomically;
-use super::h5par::{self, Access, Block};
+use super::h5par::{self, write_rows, Access};
 use super::OutputError;
 use crate::dem::system::HistoryMap;
 use crate::dem::{Grains, SlabDem, Wall};
@@ -57,27 +57,6 @@ fn err(path: &Path, message: impl Into<String>) -> OutputError {
         path: path.to_owned(),
         message: message.into(),
     }
-}
-
-/// This rank's rows of a global `[rows, cols]` f64 dataset, written collectively.
-fn write_rows(
-    g: &hdf5::Group,
-    name: &str,
-    local: &[f64],
-    cols: usize,
-    comm: &dyn Comm,
-    access: Access,
-) -> hdf5::Result<()> {
-    let rows = (local.len() / cols) as f64;
-    let all = comm.all_gather_f64(&[rows]);
-    let offset: f64 = all[..comm.rank()].iter().sum();
-    let total = all.iter().sum::<f64>() as usize;
-    let ds = g.new_dataset::<f64>().shape([total, cols]).create(name)?;
-    let block = Block {
-        start: vec![offset as u64, 0],
-        count: vec![rows as u64, cols as u64],
-    };
-    h5par::write_block(&ds, &block, local, access)
 }
 
 /// Write the checkpoint of `d` to `path` (collective, atomic).

@@ -232,3 +232,26 @@ pub fn read_block<T: H5Type>(
     }
     Ok(())
 }
+
+/// This rank's rows of a global `[rows, cols]` f64 dataset `name` in `g`, placed after the
+/// rows of the lower ranks and written collectively. Collective.
+pub fn write_rows(
+    g: &hdf5::Group,
+    name: &str,
+    local: &[f64],
+    cols: usize,
+    comm: &dyn Comm,
+    access: Access,
+) -> hdf5::Result<hdf5::Dataset> {
+    let rows = (local.len() / cols) as f64;
+    let all = comm.all_gather_f64(&[rows]);
+    let offset: f64 = all[..comm.rank()].iter().sum();
+    let total = all.iter().sum::<f64>() as usize;
+    let ds = g.new_dataset::<f64>().shape([total, cols]).create(name)?;
+    let block = Block {
+        start: vec![offset as u64, 0],
+        count: vec![rows as u64, cols as u64],
+    };
+    write_block(&ds, &block, local, access)?;
+    Ok(ds)
+}

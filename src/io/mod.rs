@@ -9,6 +9,8 @@ pub mod grains_checkpoint;
 pub mod grains_out;
 pub mod h5par;
 pub mod hdf5_out;
+pub mod mpm_checkpoint;
+pub mod mpm_out;
 pub mod picture;
 pub mod probes;
 

@@ -3,13 +3,17 @@
 
 use super::mohr_coulomb::{MohrCoulomb, Prepared};
 
-/// A material: its density and constitutive model.
+/// A material: its density, constitutive model and separation threshold.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Material {
     /// Density (kg/m³).
     pub density: f64,
     /// Constitutive model.
     pub model: Model,
+    /// Volume ratio J = V/V₀ above which a point has lost contact with its neighbours and
+    /// carries no stress until compressed back below it (a granular material below its
+    /// loosest packing; Dunatunga & Kamrin 2015). `f64::INFINITY`: never.
+    pub separation_volume_ratio: f64,
 }
 
 /// Constitutive models.
@@ -54,9 +58,15 @@ impl Material {
         l + 2.0 * g
     }
 
-    /// Dilatational wave speed √((λ + 2G)/ρ) (m/s), which sets the CFL time step.
+    /// Dilatational wave speed √((λ + 2G)/ρ) (m/s) at the initial density.
     pub fn wave_speed(&self) -> f64 {
         (self.p_wave_modulus() / self.density).sqrt()
+    }
+
+    /// The largest wave speed (m/s) of a stress-carrying point: at volume ratio J its
+    /// density is ρ/J, so c √J; with separation, J is at most the separation ratio.
+    pub fn max_wave_speed(&self) -> f64 {
+        self.wave_speed() * self.separation_volume_ratio.max(1.0).sqrt()
     }
 
     /// Run constants of the material (see [`Material::update`]).
@@ -125,6 +135,7 @@ mod tests {
         // to first order.
         let m = Material {
             density: 1000.0,
+            separation_volume_ratio: f64::INFINITY,
             model: Model::LinearElastic {
                 youngs_modulus_pa: 1e6,
                 poisson_ratio: 0.3,
@@ -143,6 +154,7 @@ mod tests {
     fn plane_strain_hooke() {
         let m = Material {
             density: 1000.0,
+            separation_volume_ratio: f64::INFINITY,
             model: Model::LinearElastic {
                 youngs_modulus_pa: 1e6,
                 poisson_ratio: 0.25,

@@ -1,7 +1,7 @@
 //! The node update and the two point sweeps (stress update, grid-to-particle). Each sweep
 //! is one parallel pass over its data; every point or node is written by one task only.
 
-use super::grid::{apply_side, Boundaries, GridSpec, NodeFields};
+use super::grid::{apply_side, Boundaries, GridSpec, NodeFields, Side};
 use super::material::Material;
 use super::mohr_coulomb::Prepared;
 use super::points::Points;
@@ -173,20 +173,72 @@ impl Interp<'_> {
     }
 }
 
-/// Stress sweep: velocity gradient L = Σ v_I ⊗ ∇S_I from `v` (the scheme's nodal
-/// velocity), then the material update, deformation gradient F ← (I + L dt) F and the
-/// accumulated strain. Returns the number of points that yielded.
+/// Velocity gradient of every point, L = Σ v_I ⊗ ∇S_I = [∂vx/∂x, ∂vx/∂y, ∂vy/∂x,
+/// ∂vy/∂y] (1/s), from the nodal velocity `v` the scheme prescribes; into `out`.
+pub fn velocity_gradients(points: &Points, it: &Interp, v: &[[f64; 2]], out: &mut Vec<[f64; 4]>) {
+    out.resize(points.len(), [0.0; 4]);
+    (
+        points.pos.par_iter(),
+        points.half0.par_iter(),
+        points.defgrad.par_iter(),
+        it.columns.cell.par_iter(),
+        out.par_iter_mut(),
+    )
+        .into_par_iter()
+        .for_each(|(&x, &h0, f, &cell, l)| {
+            *l = [0.0; 4];
+            it.each_node(x, cell, h0, f, |n, _, g| {
+                let vn = v[n];
+                l[0] += vn[0] * g[0];
+                l[1] += vn[0] * g[1];
+                l[2] += vn[1] * g[0];
+                l[3] += vn[1] * g[1];
+            });
+        });
+}
+
+/// Replace each point's volumetric strain rate tr L by the volume-weighted mean over the
+/// points of its cell (cell-averaged volumetric strain, a B-bar-like remedy for the
+/// volumetric noise and locking of MPM; Coombs et al. 2018). Sums run in canonical order
+/// within each cell, so the result does not depend on threads or ranks.
+pub fn average_volumetric(points: &Points, columns: &Columns, grads: &mut [[f64; 4]]) {
+    let order = &columns.order;
+    let mut k = 0;
+    while k < order.len() {
+        let cell = columns.cell[order[k] as usize];
+        let mut end = k;
+        let (mut sv, mut svtr) = (0.0, 0.0);
+        while end < order.len() && columns.cell[order[end] as usize] == cell {
+            let i = order[end] as usize;
+            let vol = points.volume(i);
+            sv += vol;
+            svtr += vol * (grads[i][0] + grads[i][3]);
+            end += 1;
+        }
+        let mean = svtr / sv;
+        for &i in &order[k..end] {
+            let l = &mut grads[i as usize];
+            let shift = 0.5 * (mean - (l[0] + l[3]));
+            l[0] += shift;
+            l[3] += shift;
+        }
+        k = end;
+    }
+}
+
+/// Stress sweep with the velocity gradients `grads` (see [`velocity_gradients`]): the
+/// material update, deformation gradient F ← (I + L dt) F and the accumulated strain. A
+/// point whose volume ratio J = det F exceeds its material's separation ratio carries no
+/// stress. Returns the number of points that yielded and the stress-carrying point with
+/// the largest squared wave speed c² J (m²/s², storage index).
 pub fn update_stress(
     points: &mut Points,
-    it: &Interp,
-    v: &[[f64; 2]],
+    grads: &[[f64; 4]],
     materials: &[Material],
     prepared: &[Prepared],
     dt: f64,
-) -> usize {
+) -> (usize, (f64, usize)) {
     let Points {
-        pos,
-        half0,
         defgrad,
         stress,
         strain,
@@ -195,9 +247,7 @@ pub fn update_stress(
         ..
     } = points;
     (
-        pos.par_iter(),
-        half0.par_iter(),
-        it.columns.cell.par_iter(),
+        grads.par_iter(),
         defgrad.par_iter_mut(),
         stress.par_iter_mut(),
         strain.par_iter_mut(),
@@ -205,19 +255,8 @@ pub fn update_stress(
         material.par_iter(),
     )
         .into_par_iter()
-        .map(|(&x, &h0, &cell, f, s, e, ep, &mat)| {
-            let mut l = [0.0; 4];
-            it.each_node(x, cell, h0, f, |n, _, g| {
-                let vn = v[n];
-                l[0] += vn[0] * g[0];
-                l[1] += vn[0] * g[1];
-                l[2] += vn[1] * g[0];
-                l[3] += vn[1] * g[1];
-            });
-            let (d, yielded) = materials[mat as usize].update(&prepared[mat as usize], s, l, dt, ep);
-            e[0] += d[0];
-            e[1] += d[1];
-            e[2] += d[2];
+        .enumerate()
+        .map(|(i, (&l, f, s, e, ep, &mat))| {
             // F_{n+1} = (I + L Δt) F_n.
             let a = [1.0 + l[0] * dt, l[1] * dt, l[2] * dt, 1.0 + l[3] * dt];
             *f = [
@@ -226,9 +265,27 @@ pub fn update_stress(
                 a[2] * f[0] + a[3] * f[2],
                 a[2] * f[1] + a[3] * f[3],
             ];
-            yielded as usize
+            let m = &materials[mat as usize];
+            let j = f[0] * f[3] - f[1] * f[2];
+            if j > m.separation_volume_ratio {
+                // Separated: no contact, no stress (Dunatunga & Kamrin 2015, §2.3).
+                *s = [0.0; 4];
+                e[0] += l[0] * dt;
+                e[1] += l[3] * dt;
+                e[2] += 0.5 * (l[1] + l[2]) * dt;
+                return (0, (0.0, i));
+            }
+            let (d, yielded) = m.update(&prepared[mat as usize], s, l, dt, ep);
+            e[0] += d[0];
+            e[1] += d[1];
+            e[2] += d[2];
+            let c = m.wave_speed();
+            (yielded as usize, (c * c * j, i))
         })
-        .sum()
+        .reduce(
+            || (0, (0.0, 0)),
+            |a, b| (a.0 + b.0, if b.1 .0 > a.1 .0 { b.1 } else { a.1 }),
+        )
 }
 
 /// Grid-to-particle sweep: FLIP velocity update blended with a fraction `pic` of the PIC
@@ -237,10 +294,18 @@ pub fn grid_to_points(
     points: &mut Points,
     it: &Interp,
     nodes: &NodeFields,
+    b: &Boundaries,
     dt: f64,
     pic: f64,
     pos_next: &mut Vec<[f64; 2]>,
 ) {
+    // Closed sides are rigid walls: a centre that would cross one stays on it, with its
+    // velocity into the wall removed (the grid condition acts on nodes only, so a point
+    // just inside can be interpolated across).
+    let open = |s: Side| s == Side::Open;
+    let lo = [!open(b.left), !open(b.bottom)];
+    let hi = [!open(b.right), !open(b.top)];
+    let top = [it.spec.width(), it.spec.height()].map(|l| l * (1.0 - 1e-12));
     let Points {
         pos,
         half0,
@@ -271,6 +336,13 @@ pub fn grid_to_points(
                 // FLIP: v_p += Σ S_I (v_I^new − v_I^old); PIC: v_p = Σ S_I v_I^new.
                 v[d] = (1.0 - pic) * (v[d] + dv[d]) + pic * vp[d];
                 xn[d] = x[d] + dt * vp[d];
+                if lo[d] && xn[d] < 0.0 {
+                    xn[d] = 0.0;
+                    v[d] = v[d].max(0.0);
+                } else if hi[d] && xn[d] > top[d] {
+                    xn[d] = top[d];
+                    v[d] = v[d].min(0.0);
+                }
             }
         });
 }

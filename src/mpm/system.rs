@@ -7,8 +7,13 @@ use super::mohr_coulomb::Prepared;
 use super::order::{sort_points, OrderScratch, REORDER_EVERY};
 use super::points::Points;
 use super::shape::ShapeKind;
-use super::sweeps::{grid_to_points, update_nodes, update_stress, velocities, Interp, NodeUpdate};
+use super::sweeps::{
+    average_volumetric, grid_to_points, update_nodes, update_stress, velocities,
+    velocity_gradients, Interp, NodeUpdate,
+};
 use super::transfer::{particles_to_strips, strips_to_nodes, Columns, P2g, Strip};
+use super::slab::{balanced_columns, column_counts, REBALANCE_EVERY};
+use decomposition::Comm;
 use std::time::Instant;
 use thiserror::Error;
 
@@ -26,7 +31,7 @@ pub enum Scheme {
 }
 
 /// Names of the timed stages, in the order their seconds are kept.
-pub const MPM_STAGES: [&str; 5] = ["sort", "p2g", "grid", "stress", "g2p"];
+pub const MPM_STAGES: [&str; 6] = ["sort", "p2g", "grid", "stress", "g2p", "migrate"];
 
 /// Everything the solver needs besides the points.
 #[derive(Debug, Clone, PartialEq)]
@@ -47,13 +52,26 @@ pub struct MpmSetup {
     pub damping: f64,
     /// Fraction of PIC in the velocity update (0 = pure FLIP).
     pub pic: f64,
+    /// Replace each point's volumetric strain rate by its cell's mean (see
+    /// [`super::sweeps::average_volumetric`]).
+    pub volumetric_averaging: bool,
     /// Materials, indexed by the points' `material`.
     pub materials: Vec<Material>,
 }
 
-/// The CFL limit h / c (s), c = max dilatational wave speed of the materials.
+/// The CFL limit h / c (s), c the largest wave speed of a stress-carrying point (see
+/// [`Material::max_wave_speed`]; the initial one without separation, checked every step).
 pub fn critical_dt(materials: &[Material], h: f64) -> f64 {
-    let c = materials.iter().map(|m| m.wave_speed()).fold(0.0, f64::max);
+    let c = materials
+        .iter()
+        .map(|m| {
+            if m.separation_volume_ratio.is_finite() {
+                m.max_wave_speed()
+            } else {
+                m.wave_speed()
+            }
+        })
+        .fold(0.0, f64::max);
     h / c
 }
 
@@ -71,6 +89,36 @@ pub enum MpmError {
         x: f64,
         /// Position y (m).
         y: f64,
+    },
+    /// Another rank stopped this step (its error names the point).
+    #[error("step {step}: stopped because another rank failed (see its message)")]
+    Elsewhere {
+        /// Step number.
+        step: u64,
+    },
+    /// A stress-carrying point expanded so far that its wave speed breaks the CFL limit.
+    #[error("step {step}: material point {id} at ({x:.6}, {y:.6}) m carries stress at {ratio:.1} times its initial volume, so its wave speed breaks the CFL limit (Courant {courant:.2} > 1); set separation_volume_ratio on its material (about 1.1–1.5 for a cohesionless granular material) or lower the Courant number")]
+    CflExceeded {
+        /// Step number.
+        step: u64,
+        /// Point id.
+        id: u64,
+        /// Position x (m).
+        x: f64,
+        /// Position y (m).
+        y: f64,
+        /// Its volume ratio J.
+        ratio: f64,
+        /// Its effective Courant number.
+        courant: f64,
+    },
+    /// The grid has fewer cell columns than the ranks need.
+    #[error("{ranks} ranks need at least {} cell columns (3 per slab), the grid has {columns}; use fewer ranks or smaller cells", 3 * ranks)]
+    TooManyRanks {
+        /// Ranks.
+        ranks: usize,
+        /// Cell columns of the grid.
+        columns: usize,
     },
     /// A point's position became non-finite.
     #[error("step {step}: the run went unstable: material point {id} has a non-finite position; reduce the time step (courant) or check the material")]
@@ -91,10 +139,11 @@ pub struct MpmSystem {
     pub points: Points,
     /// Node fields of the last step.
     pub nodes: NodeFields,
-    columns: Columns,
-    strips: Vec<Strip>,
+    pub(super) columns: Columns,
+    pub(super) strips: Vec<Strip>,
     scratch: OrderScratch,
     pos_next: Vec<[f64; 2]>,
+    grads: Vec<[f64; 4]>,
     prepared: Vec<Prepared>,
     min_mass: f64,
     /// Simulated time (s).
@@ -102,42 +151,77 @@ pub struct MpmSystem {
     /// Steps done.
     pub steps: u64,
     /// Seconds spent per stage (see [`MPM_STAGES`]).
-    pub seconds: [f64; 5],
-    /// Points that yielded in the last stress update.
+    pub seconds: [f64; 6],
+    /// Points that yielded in the last stress update (this rank).
     pub yielded: usize,
+    /// The stress-carrying point with the largest wave speed in the last stress update:
+    /// (c² J in m²/s², index).
+    fastest: (f64, usize),
+    /// Cell-column boundaries of the ranks' slabs (length ranks + 1).
+    pub(super) bounds: Vec<usize>,
+    /// This rank.
+    pub(super) rank: usize,
+    /// Points handed to another rank by this rank.
+    pub migrated: u64,
+    /// Times the slab boundaries moved to balance the point counts.
+    pub rebalances: u64,
+    /// Seconds spent waiting for strip and migration messages.
+    pub comm_seconds: f64,
 }
 
 impl MpmSystem {
-    /// A system of `points` on the grid of `setup`. The points are sorted on the first step.
-    pub fn new(setup: MpmSetup, points: Points) -> Self {
+    /// The share of this rank of a system of `points` (every rank passes the same, full
+    /// set) on the grid of `setup` (collective). The slabs are whole cell columns that
+    /// balance the point counts; the points are sorted on the first step.
+    pub fn new(setup: MpmSetup, points: Points, comm: &dyn Comm) -> Result<Self, MpmError> {
         let min_point = points.mass.iter().cloned().fold(f64::INFINITY, f64::min);
+        let min_point = -comm.max_f64(-min_point);
         let min_mass = if min_point.is_finite() {
             1e-9 * min_point
         } else {
             0.0
         };
-        MpmSystem {
+        let spec = setup.spec;
+        let bounds = balanced_columns(&column_counts(&points, &spec)?, comm.size(), spec.nx)?;
+        let mut sys = MpmSystem {
             prepared: setup.materials.iter().map(|m| m.prepare()).collect(),
-            nodes: NodeFields::new(&setup.spec),
-            strips: vec![Strip::default(); setup.spec.nx],
+            nodes: NodeFields::new(&spec),
+            strips: vec![Strip::default(); spec.nx],
             setup,
             points,
             columns: Columns::default(),
             scratch: OrderScratch::default(),
             pos_next: Vec::new(),
+            grads: Vec::new(),
             min_mass,
             time: 0.0,
             steps: 0,
-            seconds: [0.0; 5],
+            seconds: [0.0; 6],
             yielded: 0,
-        }
+            fastest: (0.0, 0),
+            bounds,
+            rank: comm.rank(),
+            migrated: 0,
+            rebalances: 0,
+            comm_seconds: 0.0,
+        };
+        sys.keep_own();
+        Ok(sys)
     }
 
-    fn all_node_cols(&self) -> std::ops::Range<i64> {
-        -1..self.setup.spec.nx as i64 + 2
+    /// The cell columns this rank owns.
+    pub fn own_columns(&self) -> std::ops::Range<usize> {
+        self.bounds[self.rank]..self.bounds[self.rank + 1]
     }
 
-    fn p2g(&mut self, what: P2g) {
+    /// Node columns this rank computes: the support of its cell columns.
+    fn node_cols(&self) -> std::ops::Range<i64> {
+        let c = self.own_columns();
+        c.start as i64 - 1..c.end as i64 + 2
+    }
+
+    fn p2g(&mut self, what: P2g, comm: &dyn Comm) {
+        let own = self.own_columns();
         let s = &self.setup;
         particles_to_strips(
             &self.points,
@@ -145,10 +229,13 @@ impl MpmSystem {
             &s.spec,
             s.shape,
             what,
-            &mut self.strips,
+            &mut self.strips[own.clone()],
+            own.start,
         );
-        let cols = self.all_node_cols();
-        strips_to_nodes(&self.strips, &s.spec, what, cols, &mut self.nodes);
+        self.exchange_strips(comm);
+        let cols = self.node_cols();
+        let spec = self.setup.spec;
+        strips_to_nodes(&self.strips, &spec, what, cols, &mut self.nodes);
     }
 
     fn node_update(&self) -> NodeUpdate {
@@ -160,49 +247,48 @@ impl MpmSystem {
         }
     }
 
-    /// Advance one time step. On error the state is that of the failed step's start,
-    /// except for the points' order.
-    pub fn step(&mut self) -> Result<(), MpmError> {
+    /// Recompute the points' cells and the canonical order. A point outside the grid on
+    /// any rank is an error on every rank (collective).
+    pub(super) fn sort(&mut self, comm: &dyn Comm, reorder: bool) -> Result<(), MpmError> {
+        let spec = self.setup.spec;
+        let (points, columns) = (&mut self.points, &mut self.columns);
+        let res = sort_points(points, &spec, columns, &mut self.scratch, reorder);
+        let failed = comm.any(res.is_err());
+        let step = self.steps;
+        match res {
+            Err(o) if o.pos[0].is_finite() && o.pos[1].is_finite() => Err(MpmError::LeftDomain {
+                step,
+                id: o.id,
+                x: o.pos[0],
+                y: o.pos[1],
+            }),
+            Err(o) => Err(MpmError::Unstable { step, id: o.id }),
+            Ok(()) if failed => Err(MpmError::Elsewhere { step }),
+            Ok(()) => Ok(()),
+        }
+    }
+
+    /// Advance one time step (collective). On error the points are those of the failed
+    /// step's start.
+    pub fn step(&mut self, comm: &dyn Comm) -> Result<(), MpmError> {
         let mut t = Instant::now();
-        let mut lap = |seconds: &mut [f64; 5], stage: usize| {
+        let mut lap = |seconds: &mut [f64; 6], stage: usize| {
             seconds[stage] += t.elapsed().as_secs_f64();
             t = Instant::now();
         };
         let spec = self.setup.spec;
-        let reorder = self.steps % REORDER_EVERY == 0;
-        let (points, columns) = (&mut self.points, &mut self.columns);
-        match sort_points(points, &spec, columns, &mut self.scratch, reorder) {
-            Ok(()) => {}
-            Err(o) if o.pos[0].is_finite() && o.pos[1].is_finite() => {
-                return Err(MpmError::LeftDomain {
-                    step: self.steps,
-                    id: o.id,
-                    x: o.pos[0],
-                    y: o.pos[1],
-                })
-            }
-            Err(o) => {
-                return Err(MpmError::Unstable {
-                    step: self.steps,
-                    id: o.id,
-                })
-            }
+        if self.steps > 0 && self.steps % REBALANCE_EVERY == 0 {
+            self.rebalance(comm);
         }
+        self.sort(comm, self.steps % REORDER_EVERY == 0)?;
         lap(&mut self.seconds, 0);
-        let (dt, cols, u) = (self.setup.dt, self.all_node_cols(), self.node_update());
-        let b = self.setup.boundaries;
+        let (dt, cols, u) = (self.setup.dt, self.node_cols(), self.node_update());
+        let (b, min_mass) = (self.setup.boundaries, self.min_mass);
         match self.setup.scheme {
             Scheme::Usl => {
-                self.p2g(P2g::All);
+                self.p2g(P2g::All, comm);
                 lap(&mut self.seconds, 1);
-                velocities(
-                    &mut self.nodes,
-                    &spec,
-                    &b,
-                    self.min_mass,
-                    cols.clone(),
-                    false,
-                );
+                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone(), false);
                 update_nodes(&mut self.nodes, &spec, &b, &u, cols);
                 lap(&mut self.seconds, 2);
                 self.stress_sweep(false);
@@ -211,20 +297,13 @@ impl MpmSystem {
                 lap(&mut self.seconds, 4);
             }
             Scheme::Usf => {
-                self.p2g(P2g::MassMomentum);
+                self.p2g(P2g::MassMomentum, comm);
                 lap(&mut self.seconds, 1);
-                velocities(
-                    &mut self.nodes,
-                    &spec,
-                    &b,
-                    self.min_mass,
-                    cols.clone(),
-                    false,
-                );
+                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone(), false);
                 lap(&mut self.seconds, 2);
                 self.stress_sweep(true);
                 lap(&mut self.seconds, 3);
-                self.p2g(P2g::Force);
+                self.p2g(P2g::Force, comm);
                 lap(&mut self.seconds, 1);
                 update_nodes(&mut self.nodes, &spec, &b, &u, cols);
                 lap(&mut self.seconds, 2);
@@ -232,33 +311,54 @@ impl MpmSystem {
                 lap(&mut self.seconds, 4);
             }
             Scheme::Musl => {
-                self.p2g(P2g::All);
+                self.p2g(P2g::All, comm);
                 lap(&mut self.seconds, 1);
-                velocities(
-                    &mut self.nodes,
-                    &spec,
-                    &b,
-                    self.min_mass,
-                    cols.clone(),
-                    false,
-                );
+                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone(), false);
                 update_nodes(&mut self.nodes, &spec, &b, &u, cols.clone());
                 lap(&mut self.seconds, 2);
                 self.g2p();
                 lap(&mut self.seconds, 4);
                 // Remap the updated point momenta (old positions) to the grid.
-                self.p2g(P2g::MassMomentum);
+                self.p2g(P2g::MassMomentum, comm);
                 lap(&mut self.seconds, 1);
-                velocities(&mut self.nodes, &spec, &b, self.min_mass, cols, true);
+                velocities(&mut self.nodes, &spec, &b, min_mass, cols, true);
                 lap(&mut self.seconds, 2);
                 self.stress_sweep(false);
                 lap(&mut self.seconds, 3);
             }
         }
+        self.check_courant(comm)?;
         std::mem::swap(&mut self.points.pos, &mut self.pos_next);
         self.time += dt;
         self.steps += 1;
+        if comm.size() > 1 {
+            self.migrate(comm);
+        }
+        lap(&mut self.seconds, 5);
         Ok(())
+    }
+
+    /// The Courant number of the fastest stress-carrying point must stay ≤ 1 (collective).
+    fn check_courant(&self, comm: &dyn Comm) -> Result<(), MpmError> {
+        let (c2j, i) = self.fastest;
+        let courant = c2j.sqrt() * self.setup.dt / self.setup.spec.h;
+        let worst = comm.max_f64(courant);
+        if worst <= 1.0 {
+            return Ok(());
+        }
+        if courant < worst {
+            return Err(MpmError::Elsewhere { step: self.steps });
+        }
+        let p = &self.points;
+        let m = &self.setup.materials[p.material[i] as usize];
+        Err(MpmError::CflExceeded {
+            step: self.steps,
+            id: p.id[i],
+            x: p.pos[i][0],
+            y: p.pos[i][1],
+            ratio: c2j / (m.wave_speed() * m.wave_speed()),
+            courant,
+        })
     }
 
     fn stress_sweep(&mut self, old: bool) {
@@ -272,14 +372,19 @@ impl MpmSystem {
         } else {
             &self.nodes.v_new
         };
-        self.yielded = update_stress(
+        velocity_gradients(&self.points, &it, v, &mut self.grads);
+        if self.setup.volumetric_averaging {
+            average_volumetric(&self.points, &self.columns, &mut self.grads);
+        }
+        let (yielded, fastest) = update_stress(
             &mut self.points,
-            &it,
-            v,
+            &self.grads,
             &self.setup.materials,
             &self.prepared,
             self.setup.dt,
         );
+        self.yielded = yielded;
+        self.fastest = fastest;
     }
 
     fn g2p(&mut self) {
@@ -293,28 +398,11 @@ impl MpmSystem {
             &mut self.points,
             &it,
             &self.nodes,
+            &self.setup.boundaries,
             dt,
             pic,
             &mut self.pos_next,
         );
     }
 
-    /// Kinetic energy per metre of depth (J/m), summed in point order.
-    pub fn kinetic_energy(&self) -> f64 {
-        let p = &self.points;
-        (0..p.len())
-            .map(|i| 0.5 * p.mass[i] * (p.vel[i][0].powi(2) + p.vel[i][1].powi(2)))
-            .sum()
-    }
-
-    /// Momentum per metre of depth (kg/s), summed in point order.
-    pub fn momentum(&self) -> [f64; 2] {
-        let p = &self.points;
-        (0..p.len()).fold([0.0; 2], |a, i| {
-            [
-                a[0] + p.mass[i] * p.vel[i][0],
-                a[1] + p.mass[i] * p.vel[i][1],
-            ]
-        })
-    }
 }

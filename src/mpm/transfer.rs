@@ -59,9 +59,11 @@ pub fn particles_to_strips(
     kind: ShapeKind,
     what: P2g,
     strips: &mut [Strip],
+    first_col: usize,
 ) {
     let (pad_lo, pad_hi) = if kind == ShapeKind::Linear { (0, 1) } else { (1, 2) };
-    strips.par_iter_mut().enumerate().for_each(|(c, strip)| {
+    strips.par_iter_mut().enumerate().for_each(|(k, strip)| {
+        let c = first_col + k;
         let list = &columns.order[columns.start[c]..columns.start[c + 1]];
         let (Some(&first), Some(&last)) = (list.first(), list.last()) else {
             strip.rows = 0;

@@ -46,6 +46,11 @@ pub struct MpmSpec {
     /// Fraction of PIC in the point velocity update, in [0, 1]; 0 = FLIP.
     #[serde(default)]
     pub pic_fraction: f64,
+    /// Replace each point's volumetric strain rate by the volume-weighted mean of its
+    /// cell's points (cell-averaged volumetric strain against volumetric noise and
+    /// locking; Coombs et al. 2018). Off by default.
+    #[serde(default)]
+    pub volumetric_averaging: bool,
     /// Time step: a Courant number of the CFL limit, or a fixed step checked against it.
     #[serde(default)]
     pub time_step: MpmTimeStep,
@@ -123,6 +128,12 @@ pub enum MaterialSpec {
         /// Linear softening of φ and c with equivalent plastic strain.
         #[serde(default)]
         softening: Option<SofteningSpec>,
+        /// Volume ratio V/V₀ (> 1) above which a point has lost contact and carries no
+        /// stress until compressed back below it: the loosest packing of a granular
+        /// material relative to the initial one (Dunatunga & Kamrin 2015). Absent: never;
+        /// a stressed point then stops the run if its expansion breaks the CFL limit.
+        #[serde(default)]
+        separation_volume_ratio: Option<f64>,
     },
 }
 

@@ -206,7 +206,27 @@ fn material(ctx: &Context, n: usize, m: &MaterialSpec) -> Result<Material, Scene
             })
         }
     };
-    Ok(Material { density, model })
+    let separation_volume_ratio = match *m {
+        MaterialSpec::MohrCoulomb {
+            separation_volume_ratio: Some(r),
+            ..
+        } => {
+            if !(r > 1.0 && r <= 10.0) {
+                return Err(ctx.err(
+                    "separation_volume_ratio",
+                    n,
+                    format!("must be in (1, 10] (about 1.1–1.5: loosest over initial packing), got {r}"),
+                ));
+            }
+            r
+        }
+        _ => f64::INFINITY,
+    };
+    Ok(Material {
+        density,
+        model,
+        separation_volume_ratio,
+    })
 }
 
 fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>), SceneError> {
@@ -401,6 +421,7 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
         dt,
         damping: m.local_damping,
         pic: m.pic_fraction,
+        volumetric_averaging: m.volumetric_averaging,
         materials,
     };
     Ok((setup, dt_cr, warnings))

@@ -5,7 +5,7 @@
 use super::{balanced_bounds, cutoff_for, SlabDem, TAG_COUNT, TAG_DATA};
 use crate::dem::grains::Grains;
 use crate::dem::system::{HistoryMap, WALL_KEY};
-use decomposition::{Comm, Incoming, Outgoing};
+use decomposition::{swap_neighbours_varlen, Comm};
 use std::collections::HashMap;
 
 impl SlabDem {
@@ -95,57 +95,14 @@ impl SlabDem {
         self.rebalances += 1;
     }
 
-    /// Send `msgs[0]` to the left and `msgs[1]` to the right neighbour (where they exist)
-    /// and receive theirs: sizes first, then the payloads. Returns [from left, from right].
-    pub(super) fn exchange_varlen(
-        &mut self,
-        comm: &dyn Comm,
-        msgs: &[Vec<f64>; 2],
-    ) -> [Vec<f64>; 2] {
-        let lens = msgs.clone().map(|m| [m.len() as u64]);
-        let mut got_lens = [[0u64], [0u64]];
-        let [l0, l1] = &mut got_lens;
-        self.comm_seconds += swap(
-            comm,
-            self.peers(),
-            TAG_COUNT,
-            [&lens[0], &lens[1]],
-            [l0, l1],
-        );
-        let mut got = got_lens.map(|[n]| vec![0.0f64; n as usize]);
-        let [g0, g1] = &mut got;
-        self.comm_seconds += swap(comm, self.peers(), TAG_DATA, [&msgs[0], &msgs[1]], [g0, g1]);
+    /// Variable-length messages with both neighbours (sizes, then payloads).
+    pub(super) fn exchange_varlen(&mut self, comm: &dyn Comm, msgs: &[Vec<f64>; 2]) -> [Vec<f64>; 2] {
+        let peers = self.peers();
+        let (got, wait) =
+            swap_neighbours_varlen(comm, peers, (TAG_COUNT, TAG_DATA), [&msgs[0], &msgs[1]]);
+        self.comm_seconds += wait;
         got
     }
-}
-
-/// One exchange round with both neighbours: `out[side]` goes to that neighbour (tag
-/// `tag + side`), `into[side]` is filled from it (its buffer's length is the expected
-/// size). Sides without a neighbour are skipped. Returns the seconds spent waiting.
-pub(super) fn swap<T: bytemuck::Pod>(
-    comm: &dyn Comm,
-    peers: [Option<usize>; 2],
-    tag: u16,
-    out: [&[T]; 2],
-    into: [&mut [T]; 2],
-) -> f64 {
-    let mut sends = Vec::new();
-    let mut recvs = Vec::new();
-    for (side, inc) in into.into_iter().enumerate() {
-        if let Some(p) = peers[side] {
-            sends.push(Outgoing {
-                peer: p,
-                tag: tag + side as u16,
-                data: bytemuck::cast_slice(out[side]),
-            });
-            recvs.push(Incoming {
-                peer: p,
-                tag: tag + 1 - side as u16,
-                data: bytemuck::cast_slice_mut(inc),
-            });
-        }
-    }
-    comm.exchange(&sends, &mut recvs, &mut || {})
 }
 
 /// Which neighbour (0 left, 1 right) a grain at `x` must go to, if it is outside the slab

@@ -1,0 +1,160 @@
+//! Checkpoints of MPM runs: every material point's full state and the run's counters.
+//! Written atomically and collectively (each rank its own rows); read by any rank count.
+//! The grid holds nothing between steps, so the points and the clock are the whole state
+//! and a restarted run continues bit for bit.
+
+use super::checkpoint::write_atomically;
+use super::h5par::{self, write_rows, Access};
+use super::OutputError;
+use crate::mpm::points::PACKED;
+use crate::mpm::{MpmSystem, Points};
+use decomposition::Comm;
+use hdf5::types::VarLenUnicode;
+use std::path::Path;
+
+/// `format` attribute of an MPM checkpoint.
+pub const FORMAT: &str = "grainflow-mpm-checkpoint";
+/// Version of the layout below.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// Counters of an MPM run that a restart needs besides the points.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MpmRunState {
+    /// Steps taken.
+    pub step: u64,
+    /// Simulated time (s).
+    pub time_s: f64,
+    /// Time of the next snapshot (s).
+    pub next_output_s: f64,
+    /// Points migrated so far, all ranks.
+    pub migrated: u64,
+    /// Column-collapse analysis: initial length and height of the column (m); NaN without.
+    pub initial_shape_m: [f64; 2],
+}
+
+/// What a restart reads.
+pub struct RestoredMpm {
+    /// Counters.
+    pub run: MpmRunState,
+    /// Every point, sorted by id.
+    pub points: Points,
+}
+
+fn err(path: &Path, message: impl Into<String>) -> OutputError {
+    OutputError::Checkpoint {
+        path: path.to_owned(),
+        message: message.into(),
+    }
+}
+
+/// Write the checkpoint of `sys` to `path` (collective, atomic).
+pub fn write(
+    path: &Path,
+    comm: &dyn Comm,
+    sys: &MpmSystem,
+    run: &MpmRunState,
+) -> Result<(), OutputError> {
+    let p = &sys.points;
+    let mut rows = Vec::with_capacity(p.len() * PACKED);
+    for i in 0..p.len() {
+        p.pack(i, &mut rows);
+    }
+    let fill = |file: &hdf5::File, access: Access| -> hdf5::Result<()> {
+        let text = |name: &str, v: &str| {
+            let v: VarLenUnicode = v.parse().expect("ASCII attribute");
+            file.new_attr::<VarLenUnicode>()
+                .create(name)
+                .and_then(|a| a.write_scalar(&v))
+        };
+        text("format", FORMAT)?;
+        text("grainflow_version", env!("CARGO_PKG_VERSION"))?;
+        file.new_attr::<u32>()
+            .create("format_version")
+            .and_then(|a| a.write_scalar(&FORMAT_VERSION))?;
+        for (name, v) in [("step", run.step), ("migrated", run.migrated)] {
+            file.new_attr::<u64>()
+                .create(name)
+                .and_then(|a| a.write_scalar(&v))?;
+        }
+        for (name, v) in [
+            ("time_s", run.time_s),
+            ("next_output_s", run.next_output_s),
+            ("initial_length_m", run.initial_shape_m[0]),
+            ("initial_height_m", run.initial_shape_m[1]),
+        ] {
+            file.new_attr::<f64>()
+                .create(name)
+                .and_then(|a| a.write_scalar(&v))?;
+        }
+        let g = file.create_group("mpm")?;
+        write_rows(&g, "points", &rows, PACKED, comm, access)?;
+        Ok(())
+    };
+    write_atomically(path, comm, &fill)
+}
+
+/// Read an MPM checkpoint (every rank reads every point). Collective.
+pub fn read(path: &Path, comm: &dyn Comm) -> Result<RestoredMpm, OutputError> {
+    if !path.is_file() {
+        return Err(err(
+            path,
+            "no such file; give the checkpoint.h5 of an MPM run",
+        ));
+    }
+    let bad = |e: hdf5::Error| {
+        err(
+            path,
+            format!("unreadable (truncated, or not a grainflow checkpoint): {e}"),
+        )
+    };
+    let (file, _) = h5par::open(path, comm, false).map_err(bad)?;
+    let format = file
+        .attr("format")
+        .and_then(|a| a.read_scalar::<VarLenUnicode>())
+        .map_err(bad)?
+        .to_string();
+    if format != FORMAT {
+        return Err(err(path, format!("a `{format}` file, not an MPM checkpoint; restart an MPM scene from the checkpoint.h5 its run wrote")));
+    }
+    let version = file
+        .attr("format_version")
+        .and_then(|a| a.read_scalar::<u32>())
+        .map_err(bad)?;
+    if version != FORMAT_VERSION {
+        return Err(err(
+            path,
+            format!("format version {version}, this grainflow reads {FORMAT_VERSION}"),
+        ));
+    }
+    let u = |n: &str| {
+        file.attr(n)
+            .and_then(|a| a.read_scalar::<u64>())
+            .map_err(bad)
+    };
+    let f = |n: &str| {
+        file.attr(n)
+            .and_then(|a| a.read_scalar::<f64>())
+            .map_err(bad)
+    };
+    let ds = file.dataset("mpm/points").map_err(bad)?;
+    if ds.ndim() != 2 || ds.shape()[1] != PACKED {
+        return Err(err(path, format!("/mpm/points must have {PACKED} columns")));
+    }
+    let rows = ds.read_raw::<f64>().map_err(bad)?;
+    let mut sorted: Vec<&[f64]> = rows.chunks_exact(PACKED).collect();
+    sorted.sort_by_key(|r| r[0].to_bits());
+    let mut points = Points::default();
+    for r in sorted {
+        points.push_packed(r);
+    }
+    Ok(RestoredMpm {
+        run: MpmRunState {
+            step: u("step")?,
+            time_s: f("time_s")?,
+            next_output_s: f("next_output_s")?,
+            migrated: u("migrated")?,
+            initial_shape_m: [f("initial_length_m")?, f("initial_height_m")?],
+        },
+        points,
+    })
+}

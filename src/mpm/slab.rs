@@ -1,0 +1,294 @@
+//! The distributed side of an MPM system: slabs of whole cell columns, the exchange of
+//! grid strips across slab faces (the halo reduction), migration of points to their new
+//! owner, rebalancing, and partition-independent global sums.
+//!
+//! A rank owns the points whose cell column lies in its slab `[c0, c1)`. Its nodes are the
+//! node columns `c0 − 1 ..= c1 + 1`, whose sums need the strips of cell columns
+//! `c0 − 3 .. c1 + 3`: each rank sends the strips of its first and last three columns to the
+//! neighbour on that side, unsummed, so a shared node is summed from the same operands in
+//! the same order on both ranks — and as on one rank. Results are therefore bit-identical
+//! on any number of ranks.
+
+use super::points::{Points, PACKED};
+use super::system::{MpmError, MpmSystem};
+use super::transfer::{Strip, Q};
+use decomposition::{swap_neighbours_varlen, Comm};
+
+/// Fewest cell columns in a slab: the strips a node needs come from at most three columns
+/// on either side, which must belong to the adjacent rank.
+pub const MIN_COLUMNS: usize = 3;
+
+/// Steps between checks of the load balance.
+pub const REBALANCE_EVERY: u64 = 200;
+
+const TAG_STRIP: (u16, u16) = (300, 310);
+const TAG_MIGRATE: (u16, u16) = (320, 330);
+
+/// Totals over every rank, summed column by column in canonical order (the same bits on
+/// any rank count).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Totals {
+    /// Number of points.
+    pub points: u64,
+    /// Mass (kg/m).
+    pub mass: f64,
+    /// Kinetic energy (J/m).
+    pub kinetic_energy: f64,
+    /// Momentum (kg/s per metre).
+    pub momentum: [f64; 2],
+}
+
+/// Points per cell column (every point must lie in the grid).
+pub fn column_counts(points: &Points, spec: &super::GridSpec) -> Result<Vec<f64>, MpmError> {
+    let mut counts = vec![0.0; spec.nx];
+    for (i, p) in points.pos.iter().enumerate() {
+        let c = (p[0] / spec.h).floor();
+        if !(c >= 0.0 && c < spec.nx as f64 && p[1] >= 0.0 && p[1] < spec.height()) {
+            return Err(MpmError::LeftDomain {
+                step: 0,
+                id: points.id[i],
+                x: p[0],
+                y: p[1],
+            });
+        }
+        counts[c as usize] += 1.0;
+    }
+    Ok(counts)
+}
+
+/// Slab boundaries (cell columns, length `ranks + 1`) that split `counts` into contiguous
+/// slabs of nearly equal totals, each at least [`MIN_COLUMNS`] wide.
+pub fn balanced_columns(counts: &[f64], ranks: usize, nx: usize) -> Result<Vec<usize>, MpmError> {
+    if nx < MIN_COLUMNS * ranks {
+        return Err(MpmError::TooManyRanks {
+            ranks,
+            columns: nx,
+        });
+    }
+    let total: f64 = counts.iter().sum();
+    let mut bounds = vec![0usize; ranks + 1];
+    bounds[ranks] = nx;
+    let mut acc = 0.0;
+    let mut c = 0;
+    for r in 1..ranks {
+        let target = total * r as f64 / ranks as f64;
+        let lo = bounds[r - 1] + MIN_COLUMNS;
+        let hi = nx - MIN_COLUMNS * (ranks - r);
+        while c < lo || (c < hi && acc + counts[c] * 0.5 < target) {
+            acc += counts[c];
+            c += 1;
+        }
+        bounds[r] = c;
+    }
+    Ok(bounds)
+}
+
+impl MpmSystem {
+    /// Keep only the points in this rank's slab.
+    pub(super) fn keep_own(&mut self) {
+        let (own, h) = (self.own_columns(), self.setup.spec.h);
+        let keep: Vec<bool> = self
+            .points
+            .pos
+            .iter()
+            .map(|p| own.contains(&((p[0] / h).floor().max(0.0) as usize)))
+            .collect();
+        self.points.retain(&keep);
+        self.invalidate_order();
+    }
+
+    fn peers(&self) -> [Option<usize>; 2] {
+        let ranks = self.bounds.len() - 1;
+        [
+            self.rank.checked_sub(1),
+            (self.rank + 1 < ranks).then_some(self.rank + 1),
+        ]
+    }
+
+    /// Send the strips of the first and last [`MIN_COLUMNS`] own columns to the
+    /// neighbours and receive theirs (one message per neighbour).
+    pub(super) fn exchange_strips(&mut self, comm: &dyn Comm) {
+        if comm.size() == 1 {
+            return;
+        }
+        let own = self.own_columns();
+        let pack = |cols: std::ops::Range<usize>, strips: &[Strip]| {
+            let mut out = Vec::new();
+            for s in &strips[cols] {
+                out.push(s.row_lo as f64);
+                out.push(s.rows as f64);
+                for slot in &s.data[..s.rows * 4] {
+                    out.extend_from_slice(slot);
+                }
+            }
+            out
+        };
+        let left = pack(own.start..own.start + MIN_COLUMNS, &self.strips);
+        let right = pack(own.end - MIN_COLUMNS..own.end, &self.strips);
+        let (got, wait) = swap_neighbours_varlen(comm, self.peers(), TAG_STRIP, [&left, &right]);
+        self.comm_seconds += wait;
+        let targets = [own.start - MIN_COLUMNS.min(own.start), own.end];
+        for (side, msg) in got.iter().enumerate() {
+            if self.peers()[side].is_none() {
+                continue;
+            }
+            let mut at = 0;
+            for c in targets[side]..targets[side] + MIN_COLUMNS {
+                let s = &mut self.strips[c];
+                s.row_lo = msg[at] as i64;
+                s.rows = msg[at + 1] as usize;
+                at += 2;
+                s.data.clear();
+                for slot in msg[at..at + s.rows * 4 * Q].chunks_exact(Q) {
+                    let mut v = [0.0; Q];
+                    v.copy_from_slice(slot);
+                    s.data.push(v);
+                }
+                at += s.rows * 4 * Q;
+            }
+        }
+    }
+
+    /// Forget the canonical order (the storage changed); the next sort rebuilds it.
+    pub(super) fn invalidate_order(&mut self) {
+        self.columns.order.clear();
+        self.columns.cell.clear();
+    }
+
+    /// One migration round: points outside this slab go to the neighbour on that side.
+    /// Returns whether this rank still holds points outside its slab (they came from two
+    /// slabs away after a rebalance).
+    fn migrate_round(&mut self, comm: &dyn Comm) -> bool {
+        let (own, h, peers) = (self.own_columns(), self.setup.spec.h, self.peers());
+        let side_of = |x: f64| {
+            let c = (x / h).floor();
+            if c < own.start as f64 && peers[0].is_some() {
+                Some(0)
+            } else if c >= own.end as f64 && peers[1].is_some() {
+                Some(1)
+            } else {
+                None
+            }
+        };
+        let mut out = [Vec::new(), Vec::new()];
+        let mut keep = vec![true; self.points.len()];
+        for i in 0..self.points.len() {
+            if let Some(side) = side_of(self.points.pos[i][0]) {
+                self.points.pack(i, &mut out[side]);
+                keep[i] = false;
+            }
+        }
+        let leaving = keep.iter().filter(|k| !**k).count();
+        if leaving > 0 {
+            self.points.retain(&keep);
+        }
+        self.migrated += leaving as u64;
+        let (got, wait) = swap_neighbours_varlen(comm, peers, TAG_MIGRATE, [&out[0], &out[1]]);
+        self.comm_seconds += wait;
+        let mut arrived = 0;
+        for msg in &got {
+            for p in msg.chunks_exact(PACKED) {
+                self.points.push_packed(p);
+                arrived += 1;
+            }
+        }
+        if leaving + arrived > 0 {
+            self.invalidate_order();
+        }
+        self.points.pos.iter().any(|p| side_of(p[0]).is_some())
+    }
+
+    /// Hand the points that left this slab to their new owners (collective).
+    pub(super) fn migrate(&mut self, comm: &dyn Comm) {
+        while comm.any(self.migrate_round(comm)) {}
+    }
+
+    /// Move the slab boundaries to balance the point counts when the most loaded rank
+    /// holds more than 10 % above the mean (collective).
+    pub(super) fn rebalance(&mut self, comm: &dyn Comm) {
+        if comm.size() == 1 {
+            return;
+        }
+        let Ok(mut counts) = column_counts(&self.points, &self.setup.spec) else {
+            return; // a point outside the grid: the sort reports it
+        };
+        comm.sum_f64(&mut counts);
+        let ranks = comm.size();
+        let loads: Vec<f64> = (0..ranks)
+            .map(|r| counts[self.bounds[r]..self.bounds[r + 1]].iter().sum())
+            .collect();
+        let mean = loads.iter().sum::<f64>() / ranks as f64;
+        let max = loads.iter().cloned().fold(0.0, f64::max);
+        if max <= 1.1 * mean {
+            return;
+        }
+        let Ok(bounds) = balanced_columns(&counts, ranks, self.setup.spec.nx) else {
+            return;
+        };
+        if bounds != self.bounds {
+            self.bounds = bounds;
+            self.rebalances += 1;
+            self.migrate(comm);
+        }
+    }
+
+    /// Global totals (collective): the points are sorted, then each column is summed in
+    /// canonical order and the columns are added in order.
+    pub fn totals(&mut self, comm: &dyn Comm) -> Result<Totals, MpmError> {
+        self.sort(comm, false)?;
+        let nx = self.setup.spec.nx;
+        let mut cols = vec![0.0; 5 * nx];
+        let p = &self.points;
+        for c in self.own_columns() {
+            let mut acc = [0.0; 5];
+            for &i in &self.columns.order[self.columns.start[c]..self.columns.start[c + 1]] {
+                let i = i as usize;
+                let (m, v) = (p.mass[i], p.vel[i]);
+                acc[0] += 1.0;
+                acc[1] += m;
+                acc[2] += 0.5 * m * (v[0] * v[0] + v[1] * v[1]);
+                acc[3] += m * v[0];
+                acc[4] += m * v[1];
+            }
+            cols[5 * c..5 * c + 5].copy_from_slice(&acc);
+        }
+        comm.sum_f64(&mut cols);
+        let t = cols.chunks_exact(5).fold([0.0; 5], |a, c| {
+            [a[0] + c[0], a[1] + c[1], a[2] + c[2], a[3] + c[3], a[4] + c[4]]
+        });
+        Ok(Totals {
+            points: t[0] as u64,
+            mass: t[1],
+            kinetic_energy: t[2],
+            momentum: [t[3], t[4]],
+        })
+    }
+
+    /// Slab boundaries in cell columns (length ranks + 1).
+    pub fn slab_columns(&self) -> &[usize] {
+        &self.bounds
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn balanced_columns_are_wide_enough_and_balanced() {
+        let mut counts = vec![0.0; 40];
+        for c in 0..10 {
+            counts[c] = 100.0;
+        }
+        let b = balanced_columns(&counts, 4, 40).unwrap();
+        assert_eq!(b[0], 0);
+        assert_eq!(b[4], 40);
+        for r in 0..4 {
+            assert!(b[r + 1] - b[r] >= MIN_COLUMNS, "{b:?}");
+        }
+        // The loaded first ten columns are split between the first ranks.
+        assert!(b[1] <= 4 && b[2] <= 7, "{b:?}");
+        assert!(balanced_columns(&counts, 14, 40).is_err());
+        assert_eq!(balanced_columns(&counts, 1, 40).unwrap(), vec![0, 40]);
+    }
+}
