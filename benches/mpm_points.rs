@@ -7,14 +7,18 @@
 //! steps, so the points move, re-sort and yield as in a production run.
 //! `cargo bench --bench mpm_points` (GRAINFLOW_BENCH_STEPS, default 300; GRAINFLOW_BENCH_ONLY
 //! = `cbgeo` or `million` for one part).
-use grainflow::mpm::mohr_coulomb::MohrCoulomb;
 use decomposition::SingleProcess;
+use grainflow::mpm::mohr_coulomb::MohrCoulomb;
 use grainflow::mpm::*;
 use std::time::Instant;
 
 fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> MpmSystem {
     let h = 0.01;
-    let spec = GridSpec { nx: cells_x * 4, ny: cells_y + 8, h };
+    let spec = GridSpec {
+        nx: cells_x * 4,
+        ny: cells_y + 8,
+        h,
+    };
     let mat = Material {
         density: 1800.0,
         separation_volume_ratio: f64::INFINITY,
@@ -48,7 +52,18 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
     let mut pts = Points::default();
     let (w, ht) = (cells_x as f64 * h, cells_y as f64 * h);
     let mut id = 0;
-    fill(&mut pts, &Shape::Rectangle { min: [0.0, 0.0], max: [w, ht] }, &spec, 2, 1800.0, 0, &mut id);
+    fill(
+        &mut pts,
+        &Shape::Rectangle {
+            min: [0.0, 0.0],
+            max: [w, ht],
+        },
+        &spec,
+        2,
+        1800.0,
+        0,
+        &mut id,
+    );
     for i in 0..pts.len() {
         let syy = -1800.0 * 9.81 * (ht - pts.pos[i][1]);
         pts.stress[i] = [0.5 * syy, syy, 0.0, 0.5 * syy];
@@ -57,7 +72,10 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
 }
 
 fn run(cx: usize, cy: usize, shape: ShapeKind, scheme: Scheme, threads: usize, steps: usize) {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap(, &SingleProcess).expect("system");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
     pool.install(|| {
         let mut s = column(cx, cy, shape, scheme);
         let n = s.points.len();
@@ -86,7 +104,10 @@ fn run(cx: usize, cy: usize, shape: ShapeKind, scheme: Scheme, threads: usize, s
 }
 
 fn main() {
-    let steps: usize = std::env::var("GRAINFLOW_BENCH_STEPS").ok().and_then(|v| v.parse().ok()).unwrap_or(300);
+    let steps: usize = std::env::var("GRAINFLOW_BENCH_STEPS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(300);
     let only = std::env::var("GRAINFLOW_BENCH_ONLY").unwrap_or_default();
     if only.is_empty() || only == "cbgeo" {
         println!("CB-Geo problem: a = 2 column, 150 × 300 cells of 1 cm, 2 × 2 points per cell (bar: 3.1e5 / 4.8e5 GIMP, 4.9e5 linear on 1 thread)");

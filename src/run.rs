@@ -71,7 +71,10 @@ pub fn stage_stats(
     names: &[&'static str],
     local: &[f64],
     comm: &dyn Comm,
-) -> (BTreeMap<&'static str, StageStats>, BTreeMap<&'static str, f64>) {
+) -> (
+    BTreeMap<&'static str, StageStats>,
+    BTreeMap<&'static str, f64>,
+) {
     let all = comm.all_gather_f64(local);
     let ranks = comm.size();
     let mut stages = BTreeMap::new();

@@ -14,7 +14,12 @@ const SCENE: &str = "tests/scenes/mpm_collapse.toml";
 
 fn run(ranks: usize, scene: &Path, out: &Path, extra: &[&str]) {
     let o = common::on_ranks(ranks, BIN)
-        .args(["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .args(["--quiet", "--threads", "1"])
         .args(extra)
         .output()
@@ -42,7 +47,11 @@ fn snapshots(dir: &Path) -> Vec<Snapshot> {
                 "id" => continue,
                 "grid" => {
                     for field in ["mass", "velocity"] {
-                        let v = grp.dataset(&format!("grid/{field}")).unwrap().read_raw::<f64>().unwrap();
+                        let v = grp
+                            .dataset(&format!("grid/{field}"))
+                            .unwrap()
+                            .read_raw::<f64>()
+                            .unwrap();
                         sets.push((format!("grid/{field}"), v));
                     }
                     continue;
@@ -51,7 +60,10 @@ fn snapshots(dir: &Path) -> Vec<Snapshot> {
             }
             let v = grp.dataset(&name).unwrap().read_raw::<f64>().unwrap();
             let w = v.len() / ids.len();
-            let sorted: Vec<f64> = order.iter().flat_map(|&i| v[i * w..(i + 1) * w].to_vec()).collect();
+            let sorted: Vec<f64> = order
+                .iter()
+                .flat_map(|&i| v[i * w..(i + 1) * w].to_vec())
+                .collect();
             sets.push((name, sorted));
         }
         sets.sort_by(|a, b| a.0.cmp(&b.0));
@@ -71,7 +83,8 @@ fn assert_same(a: &[Snapshot], b: &[Snapshot], what: &str) {
         assert_eq!(x.1, y.1, "{what}: {} ids", x.0);
         for ((n1, v1), (n2, v2)) in x.2.iter().zip(&y.2) {
             assert_eq!(n1, n2);
-            let same = v1.len() == v2.len() && v1.iter().zip(v2).all(|(p, q)| p.to_bits() == q.to_bits());
+            let same =
+                v1.len() == v2.len() && v1.iter().zip(v2).all(|(p, q)| p.to_bits() == q.to_bits());
             assert!(same, "{what}: {} / {n1} differs", x.0);
         }
     }
@@ -81,7 +94,10 @@ fn assert_same(a: &[Snapshot], b: &[Snapshot], what: &str) {
 fn mpm_on_1_2_and_4_ranks_match_bit_for_bit() {
     let tmp = tempfile::tempdir().unwrap();
     let scene = root().join(SCENE);
-    let dirs: Vec<_> = [1, 2, 4].iter().map(|r| tmp.path().join(format!("r{r}"))).collect();
+    let dirs: Vec<_> = [1, 2, 4]
+        .iter()
+        .map(|r| tmp.path().join(format!("r{r}")))
+        .collect();
     for (r, d) in [1, 2, 4].iter().zip(&dirs) {
         run(*r, &scene, d, &[]);
     }
@@ -91,19 +107,33 @@ fn mpm_on_1_2_and_4_ranks_match_bit_for_bit() {
     for s in &one {
         // Every id exactly once.
         assert_eq!(s.1.len(), n, "{}: point count", s.0);
-        assert!(s.1.windows(2).all(|w| w[0] < w[1]), "{}: duplicated id", s.0);
+        assert!(
+            s.1.windows(2).all(|w| w[0] < w[1]),
+            "{}: duplicated id",
+            s.0
+        );
     }
     let s1 = summary(&dirs[0]);
     for (r, d) in [2, 4].iter().zip(&dirs[1..]) {
         assert_same(&one, &snapshots(d), &format!("{r} ranks"));
         let s = summary(d);
         assert_eq!(s["status"], "ok");
-        assert!(s["migrated"].as_u64().unwrap() > 50, "{r} ranks: {} migrations", s["migrated"]);
+        assert!(
+            s["migrated"].as_u64().unwrap() > 50,
+            "{r} ranks: {} migrations",
+            s["migrated"]
+        );
         assert_eq!(s["mass_kg_m"], s1["mass_kg_m"], "{r} ranks: mass");
-        assert_eq!(s["kinetic_energy_j_m"], s1["kinetic_energy_j_m"], "{r} ranks: kinetic energy");
+        assert_eq!(
+            s["kinetic_energy_j_m"], s1["kinetic_energy_j_m"],
+            "{r} ranks: kinetic energy"
+        );
         assert_eq!(s["momentum"], s1["momentum"], "{r} ranks: momentum");
         if *r == 4 {
-            assert!(s["rebalances"].as_u64().unwrap() > 0, "4 ranks never rebalanced");
+            assert!(
+                s["rebalances"].as_u64().unwrap() > 0,
+                "4 ranks never rebalanced"
+            );
         }
     }
     // Mass is conserved: the same point masses, summed column by column (the grouping
@@ -117,10 +147,17 @@ fn mpm_on_1_2_and_4_ranks_match_bit_for_bit() {
 fn mpm_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
     let tmp = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(root().join(SCENE)).unwrap();
-    let with_ckpt = text.replace("output_every_s = 0.04", "output_every_s = 0.04\ncheckpoint_every = 1200");
+    let with_ckpt = text.replace(
+        "output_every_s = 0.04",
+        "output_every_s = 0.04\ncheckpoint_every = 1200",
+    );
     let scene = tmp.path().join("ckpt.toml");
     std::fs::write(&scene, with_ckpt).unwrap();
-    let (full, part, cont) = (tmp.path().join("full"), tmp.path().join("part"), tmp.path().join("cont"));
+    let (full, part, cont) = (
+        tmp.path().join("full"),
+        tmp.path().join("part"),
+        tmp.path().join("cont"),
+    );
     run(1, &scene, &full, &[]);
     run(2, &scene, &part, &[]);
     let ckpt = part.join("checkpoint.h5");
@@ -129,5 +166,8 @@ fn mpm_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
     let (a, b) = (snapshots(&full), snapshots(&cont));
     // The restarted run writes the snapshots after the checkpoint: compare its last one.
     assert_same(&a[a.len() - 1..], &b[b.len() - 1..], "restart");
-    assert_eq!(summary(&cont)["restarted_from_step"].as_u64().unwrap() % 1200, 0);
+    assert_eq!(
+        summary(&cont)["restarted_from_step"].as_u64().unwrap() % 1200,
+        0
+    );
 }

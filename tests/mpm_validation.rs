@@ -16,7 +16,14 @@ fn elastic(e: f64, nu: f64, rho: f64) -> Material {
     }
 }
 
-fn setup(spec: GridSpec, shape: ShapeKind, scheme: Scheme, b: Boundaries, g: [f64; 2], m: Material) -> MpmSetup {
+fn setup(
+    spec: GridSpec,
+    shape: ShapeKind,
+    scheme: Scheme,
+    b: Boundaries,
+    g: [f64; 2],
+    m: Material,
+) -> MpmSetup {
     let dt = 0.5 * critical_dt(&[m], spec.h);
     MpmSetup {
         spec,
@@ -34,7 +41,15 @@ fn setup(spec: GridSpec, shape: ShapeKind, scheme: Scheme, b: Boundaries, g: [f6
 
 fn rect(points: &mut Points, spec: &GridSpec, min: [f64; 2], max: [f64; 2], n: usize, rho: f64) {
     let mut id = points.len() as u64;
-    fill(points, &Shape::Rectangle { min, max }, spec, n, rho, 0, &mut id);
+    fill(
+        points,
+        &Shape::Rectangle { min, max },
+        spec,
+        n,
+        rho,
+        0,
+        &mut id,
+    );
 }
 
 /// Fixed–free bar (ν = 0, rollers above and below: 1-D strain) released in its first mode,
@@ -42,8 +57,17 @@ fn rect(points: &mut Points, spec: &GridSpec, min: [f64; 2], max: [f64; 2], n: u
 /// the measured period must be within 1 % of √(E/ρ) (issue 6, validation 1).
 fn wave_speed(shape: ShapeKind, scheme: Scheme) -> f64 {
     let (e, rho, len) = (1.0e6, 1000.0, 1.0);
-    let spec = GridSpec { nx: 120, ny: 2, h: 0.01 };
-    let b = Boundaries { left: Side::Fixed, right: Side::Open, bottom: Side::Roller, top: Side::Roller };
+    let spec = GridSpec {
+        nx: 120,
+        ny: 2,
+        h: 0.01,
+    };
+    let b = Boundaries {
+        left: Side::Fixed,
+        right: Side::Open,
+        bottom: Side::Roller,
+        top: Side::Roller,
+    };
     let mut pts = Points::default();
     rect(&mut pts, &spec, [0.0, 0.0], [len, 0.02], 2, rho);
     let v0 = 1e-3;
@@ -82,7 +106,10 @@ fn elastic_wave_speed_within_1_percent() {
     ] {
         let ratio = wave_speed(shape, scheme);
         println!("{shape:?} {scheme:?}: c / √(E/ρ) = {ratio:.5}");
-        assert!((ratio - 1.0).abs() < 0.01, "{shape:?} {scheme:?}: c / √(E/ρ) = {ratio}");
+        assert!(
+            (ratio - 1.0).abs() < 0.01,
+            "{shape:?} {scheme:?}: c / √(E/ρ) = {ratio}"
+        );
     }
 }
 
@@ -101,8 +128,17 @@ fn elastic_wave_speed_within_1_percent() {
 fn elastic_column_geostatic_stress_within_2_percent() {
     let (e, nu, rho, g, height) = (1.0e7, 0.3, 2000.0, 9.81, 1.0);
     for shape in [ShapeKind::Gimp, ShapeKind::Linear] {
-        let spec = GridSpec { nx: 4, ny: 24, h: 0.05 };
-        let b = Boundaries { left: Side::Roller, right: Side::Roller, bottom: Side::Fixed, top: Side::Open };
+        let spec = GridSpec {
+            nx: 4,
+            ny: 24,
+            h: 0.05,
+        };
+        let b = Boundaries {
+            left: Side::Roller,
+            right: Side::Roller,
+            bottom: Side::Fixed,
+            top: Side::Open,
+        };
         let mut pts = Points::default();
         rect(&mut pts, &spec, [0.0, 0.0], [0.2, height], 2, rho);
         let y0: Vec<f64> = pts.pos.iter().map(|p| p[1]).collect();
@@ -112,7 +148,11 @@ fn elastic_column_geostatic_stress_within_2_percent() {
         while sys.time < 1.5 {
             sys.step(&SingleProcess).expect("step");
         }
-        assert!(sys.totals(&SingleProcess).unwrap().kinetic_energy < 1e-6, "not at rest: {}", sys.totals(&SingleProcess).unwrap().kinetic_energy);
+        assert!(
+            sys.totals(&SingleProcess).unwrap().kinetic_energy < 1e-6,
+            "not at rest: {}",
+            sys.totals(&SingleProcess).unwrap().kinetic_energy
+        );
         // Per cell (by initial position): Σ σ_yy, Σ Y, count.
         let mut cells = std::collections::BTreeMap::new();
         let (mut worst_cell, mut worst_point): (f64, f64) = (0.0, 0.0);
@@ -140,8 +180,15 @@ fn elastic_column_geostatic_stress_within_2_percent() {
             100.0 * worst_cell,
             worst_point
         );
-        assert!(worst_cell < 0.02, "{shape:?}: cell-mean σ_yy off by {:.2} %", 100.0 * worst_cell);
-        assert!(worst_point < 1.0, "{shape:?}: a point's σ_yy is {worst_point:.2} × its bound");
+        assert!(
+            worst_cell < 0.02,
+            "{shape:?}: cell-mean σ_yy off by {:.2} %",
+            100.0 * worst_cell
+        );
+        assert!(
+            worst_point < 1.0,
+            "{shape:?}: a point's σ_yy is {worst_point:.2} × its bound"
+        );
     }
 }
 
@@ -153,7 +200,11 @@ fn block_slides_on_frictional_incline_within_3_percent() {
     let (g, theta, mu, rho) = (9.81f64, 30f64.to_radians(), 0.3, 2000.0);
     let accel = g * (theta.sin() - mu * theta.cos());
     for scheme in [Scheme::Usf, Scheme::Usl, Scheme::Musl] {
-        let spec = GridSpec { nx: 60, ny: 8, h: 0.02 };
+        let spec = GridSpec {
+            nx: 60,
+            ny: 8,
+            h: 0.02,
+        };
         let b = Boundaries {
             left: Side::Open,
             right: Side::Open,
@@ -168,7 +219,19 @@ fn block_slides_on_frictional_incline_within_3_percent() {
             pts.stress[i] = [0.3 / 0.7 * syy, syy, 0.0, 0.3 / 0.7 * syy];
         }
         let grav = [g * theta.sin(), -g * theta.cos()];
-        let mut sys = MpmSystem::new(setup(spec, ShapeKind::Gimp, scheme, b, grav, elastic(5.0e7, 0.3, rho)), pts, &SingleProcess).expect("system");
+        let mut sys = MpmSystem::new(
+            setup(
+                spec,
+                ShapeKind::Gimp,
+                scheme,
+                b,
+                grav,
+                elastic(5.0e7, 0.3, rho),
+            ),
+            pts,
+            &SingleProcess,
+        )
+        .expect("system");
         let centre = |s: &MpmSystem| {
             let p = &s.points;
             (0..p.len()).map(|i| p.mass[i] * p.pos[i][0]).sum::<f64>() / p.total_mass()
@@ -183,7 +246,14 @@ fn block_slides_on_frictional_incline_within_3_percent() {
             let err = (centre(&sys) - x0 - exact) / exact;
             worst = worst.max(err.abs());
         }
-        println!("{scheme:?}: worst displacement error {:.3} %", 100.0 * worst);
-        assert!(worst < 0.03, "{scheme:?}: displacement off by {:.2} %", 100.0 * worst);
+        println!(
+            "{scheme:?}: worst displacement error {:.3} %",
+            100.0 * worst
+        );
+        assert!(
+            worst < 0.03,
+            "{scheme:?}: displacement off by {:.2} %",
+            100.0 * worst
+        );
     }
 }

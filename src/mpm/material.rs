@@ -144,7 +144,13 @@ mod tests {
         let (omega, dt, s) = (2.0, 1e-4, -1000.0);
         let mut st = [s, 0.0, 0.0, 0.0];
         let mut ep = 0.0;
-        let (d, _) = m.update(&m.prepare(), &mut st, [0.0, -omega, omega, 0.0], dt, &mut ep);
+        let (d, _) = m.update(
+            &m.prepare(),
+            &mut st,
+            [0.0, -omega, omega, 0.0],
+            dt,
+            &mut ep,
+        );
         assert_eq!(d, [0.0, 0.0, 0.0]);
         assert!((st[2] - s * omega * dt).abs() < 1e-12, "{st:?}");
         assert_eq!(st[0], s);

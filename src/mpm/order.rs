@@ -97,7 +97,11 @@ pub fn sort_points(
     }
     if reorder {
         points.permute(&columns.order, &mut scratch.permute);
-        let cells: Vec<[u32; 2]> = columns.order.iter().map(|&o| columns.cell[o as usize]).collect();
+        let cells: Vec<[u32; 2]> = columns
+            .order
+            .iter()
+            .map(|&o| columns.cell[o as usize])
+            .collect();
         columns.cell = cells;
         for (k, o) in columns.order.iter_mut().enumerate() {
             *o = k as u32;
@@ -106,7 +110,12 @@ pub fn sort_points(
     Ok(())
 }
 
-fn rebuild_order(points: &Points, spec: &GridSpec, columns: &mut Columns, scratch: &mut OrderScratch) {
+fn rebuild_order(
+    points: &Points,
+    spec: &GridSpec,
+    columns: &mut Columns,
+    scratch: &mut OrderScratch,
+) {
     let Columns { start, cell, order } = columns;
     let OrderScratch { counts, next, .. } = scratch;
     counts.clear();
@@ -154,9 +163,20 @@ mod tests {
 
     #[test]
     fn sorts_by_column_row_then_id() {
-        let spec = GridSpec { nx: 3, ny: 2, h: 1.0 };
+        let spec = GridSpec {
+            nx: 3,
+            ny: 2,
+            h: 1.0,
+        };
         let mut p = Points::default();
-        let spots = [[2.5, 0.5], [0.2, 1.5], [0.7, 1.2], [0.5, 0.5], [2.1, 0.1], [1.5, 1.5]];
+        let spots = [
+            [2.5, 0.5],
+            [0.2, 1.5],
+            [0.7, 1.2],
+            [0.5, 0.5],
+            [2.1, 0.1],
+            [1.5, 1.5],
+        ];
         for (i, &s) in spots.iter().enumerate() {
             p.push(10 - i as u64, s, 1.0, 1.0, 0.25, 0);
         }
@@ -176,7 +196,10 @@ mod tests {
         p.pos[0] = [3.5, 0.0];
         assert_eq!(
             sort_points(&mut p, &spec, &mut cols, &mut scratch, false),
-            Err(Outside { id: 8, pos: [3.5, 0.0] })
+            Err(Outside {
+                id: 8,
+                pos: [3.5, 0.0]
+            })
         );
     }
 }

@@ -60,10 +60,7 @@ pub fn column_counts(points: &Points, spec: &super::GridSpec) -> Result<Vec<f64>
 /// slabs of nearly equal totals, each at least [`MIN_COLUMNS`] wide.
 pub fn balanced_columns(counts: &[f64], ranks: usize, nx: usize) -> Result<Vec<usize>, MpmError> {
     if nx < MIN_COLUMNS * ranks {
-        return Err(MpmError::TooManyRanks {
-            ranks,
-            columns: nx,
-        });
+        return Err(MpmError::TooManyRanks { ranks, columns: nx });
     }
     let total: f64 = counts.iter().sum();
     let mut bounds = vec![0usize; ranks + 1];
@@ -254,7 +251,13 @@ impl MpmSystem {
         }
         comm.sum_f64(&mut cols);
         let t = cols.chunks_exact(5).fold([0.0; 5], |a, c| {
-            [a[0] + c[0], a[1] + c[1], a[2] + c[2], a[3] + c[3], a[4] + c[4]]
+            [
+                a[0] + c[0],
+                a[1] + c[1],
+                a[2] + c[2],
+                a[3] + c[3],
+                a[4] + c[4],
+            ]
         });
         Ok(Totals {
             points: t[0] as u64,

@@ -7,12 +7,12 @@ use super::mohr_coulomb::Prepared;
 use super::order::{sort_points, OrderScratch, REORDER_EVERY};
 use super::points::Points;
 use super::shape::ShapeKind;
+use super::slab::{balanced_columns, column_counts, REBALANCE_EVERY};
 use super::sweeps::{
     average_volumetric, grid_to_points, update_nodes, update_stress, velocities,
     velocity_gradients, Interp, NodeUpdate,
 };
 use super::transfer::{particles_to_strips, strips_to_nodes, Columns, P2g, Strip};
-use super::slab::{balanced_columns, column_counts, REBALANCE_EVERY};
 use decomposition::Comm;
 use std::time::Instant;
 use thiserror::Error;
@@ -404,5 +404,4 @@ impl MpmSystem {
             &mut self.pos_next,
         );
     }
-
 }

@@ -61,7 +61,11 @@ pub fn particles_to_strips(
     strips: &mut [Strip],
     first_col: usize,
 ) {
-    let (pad_lo, pad_hi) = if kind == ShapeKind::Linear { (0, 1) } else { (1, 2) };
+    let (pad_lo, pad_hi) = if kind == ShapeKind::Linear {
+        (0, 1)
+    } else {
+        (1, 2)
+    };
     strips.par_iter_mut().enumerate().for_each(|(k, strip)| {
         let c = first_col + k;
         let list = &columns.order[columns.start[c]..columns.start[c + 1]];
@@ -75,7 +79,9 @@ pub fn particles_to_strips(
         strip.data.clear();
         strip.data.resize(strip.rows * 4, [0.0; Q]);
         match what {
-            P2g::MassMomentum => accumulate::<true, false>(points, columns, spec, kind, list, strip),
+            P2g::MassMomentum => {
+                accumulate::<true, false>(points, columns, spec, kind, list, strip)
+            }
             P2g::Force => accumulate::<false, true>(points, columns, spec, kind, list, strip),
             P2g::All => accumulate::<true, true>(points, columns, spec, kind, list, strip),
         }

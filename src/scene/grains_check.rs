@@ -63,7 +63,12 @@ pub(super) fn non_negative(ctx: &Context, key: &str, v: f64) -> Result<(), Scene
     }
 }
 
-pub(super) fn rectangle(ctx: &Context, key: &str, lo: [f64; 2], hi: [f64; 2]) -> Result<(), SceneError> {
+pub(super) fn rectangle(
+    ctx: &Context,
+    key: &str,
+    lo: [f64; 2],
+    hi: [f64; 2],
+) -> Result<(), SceneError> {
     if lo.iter().chain(&hi).all(|v| v.is_finite()) && lo[0] < hi[0] && lo[1] < hi[1] {
         Ok(())
     } else {

@@ -103,7 +103,10 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
         message: e.to_string().trim_end().to_string(),
     })?;
     if table.contains_key("mpm") {
-        if let Some(other) = ["fluid", "grains"].into_iter().find(|k| table.contains_key(*k)) {
+        if let Some(other) = ["fluid", "grains"]
+            .into_iter()
+            .find(|k| table.contains_key(*k))
+        {
             return Err(SceneError::Invalid {
                 path: path.to_owned(),
                 line: None,

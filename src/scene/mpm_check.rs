@@ -62,14 +62,15 @@ pub fn parse_mpm(text: &str, path: &Path) -> Result<ValidMpmScene, SceneError> {
     Ok(valid)
 }
 
+/// Where a value sits in the scene: its key and the occurrence of that key.
+type At<'a> = (&'a str, usize);
+
+/// `v` must lie in `[lo, hi]`, or `[lo, hi)` when `open_hi`; `hint` explains the range.
 fn in_range(
     ctx: &Context,
-    key: &str,
-    nth: usize,
+    (key, nth): At,
     v: f64,
-    lo: f64,
-    hi: f64,
-    open_hi: bool,
+    (lo, hi, open_hi): (f64, f64, bool),
     hint: &str,
 ) -> Result<(), SceneError> {
     let ok = v.is_finite() && v >= lo && if open_hi { v < hi } else { v <= hi };
@@ -102,7 +103,7 @@ fn material(ctx: &Context, n: usize, m: &MaterialSpec) -> Result<Material, Scene
     };
     positive(ctx, "density_kg_m3", density, "the material density")?;
     positive(ctx, "youngs_modulus_pa", e, "Young's modulus")?;
-    in_range(ctx, "poisson_ratio", n, nu, 0.0, 0.5, true, "")?;
+    in_range(ctx, ("poisson_ratio", n), nu, (0.0, 0.5, true), "")?;
     let model = match *m {
         MaterialSpec::LinearElastic { .. } => Model::LinearElastic {
             youngs_modulus_pa: e,
@@ -125,12 +126,9 @@ fn material(ctx: &Context, n: usize, m: &MaterialSpec) -> Result<Material, Scene
             }
             in_range(
                 ctx,
-                "dilation_deg",
-                n,
+                ("dilation_deg", n),
                 dilation_deg,
-                0.0,
-                friction_deg,
-                false,
+                (0.0, friction_deg, false),
                 " (0 ≤ ψ ≤ φ)",
             )?;
             non_negative(ctx, "cohesion_pa", cohesion_pa)?;
@@ -138,12 +136,9 @@ fn material(ctx: &Context, n: usize, m: &MaterialSpec) -> Result<Material, Scene
             let cutoff = tension_cutoff_pa.unwrap_or(apex);
             in_range(
                 ctx,
-                "tension_cutoff_pa",
-                n,
+                ("tension_cutoff_pa", n),
                 cutoff,
-                0.0,
-                apex,
-                false,
+                (0.0, apex, false),
                 " (at most the Mohr–Coulomb apex c cot φ)",
             )?;
             let softening = match softening {
@@ -151,12 +146,9 @@ fn material(ctx: &Context, n: usize, m: &MaterialSpec) -> Result<Material, Scene
                 Some(s) => {
                     in_range(
                         ctx,
-                        "residual_friction_deg",
-                        n,
+                        ("residual_friction_deg", n),
                         s.residual_friction_deg,
-                        0.0,
-                        friction_deg,
-                        false,
+                        (0.0, friction_deg, false),
                         " (positive, at most the peak)",
                     )?;
                     if s.residual_friction_deg <= 0.0 {
@@ -168,12 +160,9 @@ fn material(ctx: &Context, n: usize, m: &MaterialSpec) -> Result<Material, Scene
                     }
                     in_range(
                         ctx,
-                        "residual_cohesion_pa",
-                        n,
+                        ("residual_cohesion_pa", n),
                         s.residual_cohesion_pa,
-                        0.0,
-                        cohesion_pa,
-                        false,
+                        (0.0, cohesion_pa, false),
                         " (at most the peak cohesion)",
                     )?;
                     non_negative(ctx, "plastic_strain_start", s.plastic_strain_start)?;
@@ -215,7 +204,9 @@ fn material(ctx: &Context, n: usize, m: &MaterialSpec) -> Result<Material, Scene
                 return Err(ctx.err(
                     "separation_volume_ratio",
                     n,
-                    format!("must be in (1, 10] (about 1.1–1.5: loosest over initial packing), got {r}"),
+                    format!(
+                        "must be in (1, 10] (about 1.1–1.5: loosest over initial packing), got {r}"
+                    ),
                 ));
             }
             r
@@ -255,8 +246,20 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             ),
         ));
     }
-    in_range(ctx, "local_damping", 0, m.local_damping, 0.0, 1.0, true, "")?;
-    in_range(ctx, "pic_fraction", 0, m.pic_fraction, 0.0, 1.0, false, "")?;
+    in_range(
+        ctx,
+        ("local_damping", 0),
+        m.local_damping,
+        (0.0, 1.0, true),
+        "",
+    )?;
+    in_range(
+        ctx,
+        ("pic_fraction", 0),
+        m.pic_fraction,
+        (0.0, 1.0, false),
+        "",
+    )?;
     if !m.gravity_m_s2.iter().all(|g| g.is_finite()) {
         return Err(ctx.err("gravity_m_s2", 0, "must be finite"));
     }
@@ -488,7 +491,11 @@ impl ValidMpmScene {
     /// The scene's material points (see [`build_points`]).
     pub fn points(&self) -> Result<Points, SceneError> {
         let text = std::fs::read_to_string(&self.path).unwrap_or_default();
-        let base = self.path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let base = self
+            .path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
         let ctx = Context {
             text: &text,
             path: &self.path,

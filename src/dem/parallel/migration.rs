@@ -96,7 +96,11 @@ impl SlabDem {
     }
 
     /// Variable-length messages with both neighbours (sizes, then payloads).
-    pub(super) fn exchange_varlen(&mut self, comm: &dyn Comm, msgs: &[Vec<f64>; 2]) -> [Vec<f64>; 2] {
+    pub(super) fn exchange_varlen(
+        &mut self,
+        comm: &dyn Comm,
+        msgs: &[Vec<f64>; 2],
+    ) -> [Vec<f64>; 2] {
         let peers = self.peers();
         let (got, wait) =
             swap_neighbours_varlen(comm, peers, (TAG_COUNT, TAG_DATA), [&msgs[0], &msgs[1]]);

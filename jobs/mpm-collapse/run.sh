@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The MPM column-collapse sweep (a = 0.5, 1, 2, 4, 8 at 2 mm cells) and the resolution /
+# shape-function / points-per-cell study at a = 2 and 4, then the table and the plot with
+# the DEM sweep and the published laws.
+# Usage: [THREADS=n] jobs/mpm-collapse/run.sh [ranks] [scene names...]   (all scenes: about
+# an hour on 2 cores; e.g. `run.sh 1 a0.5 a1 a2` for the short columns)
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+ranks=${1:-1}
+shift || true
+cargo build --release --quiet
+python3 jobs/mpm-collapse/make-scenes.py >/dev/null
+out=runs/mpm-collapse
+mkdir -p "$out"
+names=("$@")
+if [ ${#names[@]} -eq 0 ]; then
+  names=(a0.5 a1 a2 a4 a8 a0.5-h2mm a1-h2mm a2-h2mm a2-linear a2-h2mm-linear a2-ppc4 a2-flip
+         a4-h2mm a4-linear a4-h2mm-linear a4-ppc4 a4-flip)
+fi
+for name in "${names[@]}"; do
+  scene=jobs/mpm-collapse/$name.toml
+  if [ "$ranks" -gt 1 ]; then
+    mpirun --oversubscribe --bind-to none -np "$ranks" target/release/grainflow run \
+      "$scene" --out "$out/$name" --quiet --threads 1 || true
+  else
+    target/release/grainflow run "$scene" --out "$out/$name" --quiet --threads "${THREADS:-2}" || true
+  fi
+done
+python3 scripts/plot-mpm-collapse.py "$out" --out jobs/mpm-collapse/runout.png

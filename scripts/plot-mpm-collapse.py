@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""Run-out of the MPM column-collapse sweep against the experiments, the published DEM law
+and grainflow's own DEM sweep.
+
+Reads runs/mpm-collapse/<name>/summary.json (jobs/mpm-collapse/run.sh): the main sweep is
+a<a> (2 mm cells, GIMP, 2x2 points per cell); the study runs are a<a>-h4mm, -linear, -ppc4.
+Prints a table of (L_f - L_i)/L_i and H_f/L_i against the experiments' law (Lajeunesse et
+al. 2005) and the 2-D DEM law, the study's differences, and draws run-out vs a on log axes
+with the DEM sweep of issue 5 (runs/column-collapse if present, else its committed table).
+"""
+import argparse
+import glob
+import json
+import math
+import os
+
+EXP = (1.2, 1.9, 2.3)   # Lajeunesse et al. 2005: 1.2 a below a ~ 2.3, 1.9 a^(2/3) above
+DEM = (1.67, 2.7, 2.7)  # published 2-D DEM of disks: 1.67 a below a ~ 2.7, 2.7 a^(2/3) above
+# grainflow's DEM sweep (jobs/column-collapse/README.md): a, mean run-out, std over packings.
+DEM_SWEEP = [(0.5, 0.742, 0.018), (1.0, 1.540, 0.137), (2.0, 3.284, 0.079),
+             (4.0, 6.606, 0.170), (7.88, 11.71, 0.49)]
+
+
+def law(a, c):
+    lin, pow_, t = c
+    return lin * a if a < t else pow_ * a ** (2 / 3)
+
+
+def load(folder):
+    runs = {}
+    for f in sorted(glob.glob(os.path.join(folder, "*", "summary.json"))):
+        s = json.load(open(f))
+        if s.get("status") not in ("ok", "checks-failed") or "collapse.runout" not in s["results"]:
+            print(f"skipped {f}: status {s.get('status')}, {s.get('error')}")
+            continue
+        runs[os.path.basename(os.path.dirname(f))] = s
+    return runs
+
+
+def dem_sweep():
+    root = os.path.join(os.path.dirname(__file__), "..", "runs", "column-collapse")
+    got = {}
+    for f in glob.glob(os.path.join(root, "*", "summary.json")):
+        r = json.load(open(f))["results"]
+        if "collapse.runout" in r:
+            got.setdefault(round(r["collapse.aspect_ratio"], 1), []).append(r["collapse.runout"])
+    if not got:
+        return DEM_SWEEP
+    rows = []
+    for a, v in sorted(got.items()):
+        m = sum(v) / len(v)
+        sd = (sum((x - m) ** 2 for x in v) / max(len(v) - 1, 1)) ** 0.5
+        rows.append((a, m, sd))
+    return rows
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("runs", help="folder with one run folder per scene")
+    p.add_argument("--out", default=None, help="PNG to write")
+    args = p.parse_args()
+    runs = load(args.runs)
+    main_rows = []
+    print(f"{'scene':>10} {'a':>5} {'points':>7} {'runout':>7} {'exp.':>6} {'dev':>7} {'DEM law':>7} {'dev':>7} {'H_f/L_i':>7} {'t/tau_c':>7} {'Mpts/s':>6}")
+    for name, s in sorted(runs.items(), key=lambda kv: (kv[1]["results"]["collapse.aspect_ratio"], kv[0])):
+        r = s["results"]
+        a, ro = r["collapse.aspect_ratio"], r["collapse.runout"]
+        e, d = law(a, EXP), law(a, DEM)
+        print(f"{name:>10} {a:5.2f} {s['points']:7d} {ro:7.3f} {e:6.3f} {100*(ro/e-1):+6.1f}% {d:7.3f} {100*(ro/d-1):+6.1f}% "
+              f"{r['collapse.final_height']:7.3f} {r['collapse.stop_time']:7.2f} {s['point_steps_per_s']/1e6:6.2f}")
+        if "-" not in name:
+            main_rows.append((a, ro))
+    for a in (2, 4):
+        base = runs.get(f"a{a}")
+        if not base:
+            continue
+        b = base["results"]["collapse.runout"]
+        for var in ("h4mm", "linear", "ppc4"):
+            v = runs.get(f"a{a}-{var}")
+            if v:
+                print(f"a = {a}: {var:6s} run-out {v['results']['collapse.runout']:.3f} vs {b:.3f} ({100*(v['results']['collapse.runout']/b-1):+.1f} %)")
+    if not args.out or not main_rows:
+        return
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib not installed: table only")
+        return
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    xs = [0.4 * 1.05 ** i for i in range(60)]
+    ax.loglog(xs, [law(a, EXP) for a in xs], "k-", label="experiments (Lajeunesse et al. 2005)")
+    ax.loglog(xs, [law(a, DEM) for a in xs], "k--", label="published 2-D DEM law")
+    dem = dem_sweep()
+    ax.errorbar([d[0] for d in dem], [d[1] for d in dem], yerr=[d[2] for d in dem], fmt="s",
+                color="tab:blue", label="grainflow DEM (disks)")
+    ax.loglog([a for a, _ in main_rows], [r for _, r in main_rows], "o", color="tab:red",
+              label="grainflow MPM (GIMP, Mohr-Coulomb)")
+    ax.set_xlabel("aspect ratio a = H_i / L_i")
+    ax.set_ylabel("run-out (L_f - L_i) / L_i")
+    ax.legend(fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(args.out, dpi=120)
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
