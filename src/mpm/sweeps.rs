@@ -68,6 +68,7 @@ pub fn velocities(
         target[range].par_chunks_mut(rows),
     )
         .into_par_iter()
+        .with_max_len(2)
         .enumerate()
         .for_each(|(n, (m, p, v))| {
             let i = node_cols.start + n as i64;
@@ -111,6 +112,7 @@ pub fn update_nodes(
         v_new[range].par_chunks_mut(rows),
     )
         .into_par_iter()
+        .with_max_len(2)
         .enumerate()
         .for_each(|(n, (m, f, vo, vn))| {
             let i = node_cols.start + n as i64;

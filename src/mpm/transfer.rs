@@ -66,26 +66,32 @@ pub fn particles_to_strips(
     } else {
         (1, 2)
     };
-    strips.par_iter_mut().enumerate().for_each(|(k, strip)| {
-        let c = first_col + k;
-        let list = &columns.order[columns.start[c]..columns.start[c + 1]];
-        let (Some(&first), Some(&last)) = (list.first(), list.last()) else {
-            strip.rows = 0;
+    // Columns differ wildly in load (most are empty): small tasks keep both threads busy.
+    strips
+        .par_iter_mut()
+        .with_max_len(1)
+        .enumerate()
+        .for_each(|(k, strip)| {
+            let c = first_col + k;
+            let list = &columns.order[columns.start[c]..columns.start[c + 1]];
+            let (Some(&first), Some(&last)) = (list.first(), list.last()) else {
+                strip.rows = 0;
+                strip.data.clear();
+                return;
+            };
+            strip.row_lo = columns.cell[first as usize][1] as i64 - pad_lo;
+            strip.rows =
+                (columns.cell[last as usize][1] as i64 + pad_hi - strip.row_lo + 1) as usize;
             strip.data.clear();
-            return;
-        };
-        strip.row_lo = columns.cell[first as usize][1] as i64 - pad_lo;
-        strip.rows = (columns.cell[last as usize][1] as i64 + pad_hi - strip.row_lo + 1) as usize;
-        strip.data.clear();
-        strip.data.resize(strip.rows * 4, [0.0; Q]);
-        match what {
-            P2g::MassMomentum => {
-                accumulate::<true, false>(points, columns, spec, kind, list, strip)
+            strip.data.resize(strip.rows * 4, [0.0; Q]);
+            match what {
+                P2g::MassMomentum => {
+                    accumulate::<true, false>(points, columns, spec, kind, list, strip)
+                }
+                P2g::Force => accumulate::<false, true>(points, columns, spec, kind, list, strip),
+                P2g::All => accumulate::<true, true>(points, columns, spec, kind, list, strip),
             }
-            P2g::Force => accumulate::<false, true>(points, columns, spec, kind, list, strip),
-            P2g::All => accumulate::<true, true>(points, columns, spec, kind, list, strip),
-        }
-    });
+        });
 }
 
 /// Add the contributions of the points `list` (one cell column, canonical order) to
@@ -166,6 +172,7 @@ pub fn strips_to_nodes(
         active[first..first + count].par_iter_mut(),
     )
         .into_par_iter()
+        .with_max_len(2)
         .enumerate()
         .for_each(|(n, (mass, mom, force, act))| {
             let i = node_cols.start + n as i64;
