@@ -60,7 +60,7 @@ def main():
     p.add_argument("--out", default=None, help="PNG to write")
     args = p.parse_args()
     runs = load(args.runs)
-    main_rows = []
+    main_rows, rough_rows = [], []
     print(f"{'scene':>10} {'a':>5} {'points':>7} {'runout':>7} {'exp.':>6} {'dev':>7} {'DEM law':>7} {'dev':>7} {'H_f/L_i':>7} {'t/tau_c':>7} {'Mpts/s':>6}")
     for name, s in sorted(runs.items(), key=lambda kv: (kv[1]["results"]["collapse.aspect_ratio"], kv[0])):
         r = s["results"]
@@ -70,12 +70,14 @@ def main():
               f"{r['collapse.final_height']:7.3f} {r['collapse.stop_time']:7.2f} {s['point_steps_per_s']/1e6:6.2f}")
         if "-" not in name:
             main_rows.append((a, ro))
+        elif name.endswith("-rough") and "h2mm" not in name:
+            rough_rows.append((a, ro))
     for a in (2, 4):
         base = runs.get(f"a{a}")
         if not base:
             continue
         b = base["results"]["collapse.runout"]
-        for var in ("h4mm", "linear", "ppc4"):
+        for var in ("h2mm", "linear", "h2mm-linear", "ppc4", "flip", "rough"):
             v = runs.get(f"a{a}-{var}")
             if v:
                 print(f"a = {a}: {var:6s} run-out {v['results']['collapse.runout']:.3f} vs {b:.3f} ({100*(v['results']['collapse.runout']/b-1):+.1f} %)")
@@ -96,7 +98,10 @@ def main():
     ax.errorbar([d[0] for d in dem], [d[1] for d in dem], yerr=[d[2] for d in dem], fmt="s",
                 color="tab:blue", label="grainflow DEM (disks)")
     ax.loglog([a for a, _ in main_rows], [r for _, r in main_rows], "o", color="tab:red",
-              label="grainflow MPM (GIMP, Mohr-Coulomb)")
+              label="grainflow MPM, Coulomb base (tan 24.8 deg)")
+    if rough_rows:
+        ax.loglog([a for a, _ in rough_rows], [r for _, r in rough_rows], "^", color="tab:orange",
+                  label="grainflow MPM, rough (no-slip) base")
     ax.set_xlabel("aspect ratio a = H_i / L_i")
     ax.set_ylabel("run-out (L_f - L_i) / L_i")
     ax.legend(fontsize=8)

@@ -253,15 +253,7 @@ fn run_grain_scene(
             eprintln!("warning: {w}");
         }
     }
-    let opts = RunOptions {
-        out_dir: out.clone(),
-        precision: None,
-        backend: None,
-        gpu_storage: None,
-        steps: None,
-        progress,
-        restart,
-    };
+    let opts = RunOptions::particles(out.clone(), progress, restart);
     if comm.is_root() {
         eprintln!(
             "running grains scene {} on {} rank(s) × {} threads",
@@ -284,27 +276,52 @@ fn run_grain_scene(
         summary.grain_steps_per_s / 1e6,
         summary.migrated
     );
-    for (k, v) in &summary.results {
+    let outcome = Outcome {
+        results: &summary.results,
+        checks: &summary.checks,
+        files: "grains.h5 + grains.xdmf",
+        error: summary.error.as_deref(),
+        status: summary.status,
+        steps: summary.steps,
+    };
+    Ok(report(&outcome, &out))
+}
+
+/// What a particle run (grains or MPM) reports at its end.
+struct Outcome<'a> {
+    results: &'a grainflow::analysis::Results,
+    checks: &'a [grainflow::analysis::checks::CheckOutcome],
+    files: &'a str,
+    error: Option<&'a str>,
+    status: Status,
+    steps: u64,
+}
+
+/// Print results, checks, the output folder, and any error or restart hint; returns the
+/// exit code.
+fn report(o: &Outcome, out: &std::path::Path) -> i32 {
+    for (k, v) in o.results {
         println!("  {k} = {v:.6e}");
     }
-    print_checks(&summary.checks);
+    print_checks(o.checks);
     println!(
-        "output: {}  (summary.json, grains.h5 + grains.xdmf, pictures/)",
-        out.display()
+        "output: {}  (summary.json, {}, pictures/)",
+        out.display(),
+        o.files
     );
-    if let Some(e) = &summary.error {
+    if let Some(e) = o.error {
         eprintln!("error: {e}");
     }
-    match summary.status {
+    match o.status {
         Status::ChecksFailed => eprintln!("error: at least one check failed"),
         Status::Interrupted => eprintln!(
             "stopped by SIGTERM at step {}; continue with --restart {}",
-            summary.steps,
+            o.steps,
             out.join("checkpoint.h5").display()
         ),
         _ => {}
     }
-    Ok(exit_code(summary.status))
+    exit_code(o.status)
 }
 
 /// One line per check: PASS/FAIL, the quantity, its value and the bounds.
@@ -404,15 +421,7 @@ fn run_mpm_scene(
             rayon::current_num_threads()
         );
     }
-    let opts = RunOptions {
-        out_dir: out.clone(),
-        precision: None,
-        backend: None,
-        gpu_storage: None,
-        steps: None,
-        progress,
-        restart,
-    };
+    let opts = RunOptions::particles(out.clone(), progress, restart);
     let summary = grainflow::run_mpm::run_mpm(m, &opts, comm)?;
     if !comm.is_root() {
         return Ok(exit_code(summary.status));
@@ -427,25 +436,13 @@ fn run_mpm_scene(
         summary.point_steps_per_s / 1e6,
         summary.migrated
     );
-    for (k, v) in &summary.results {
-        println!("  {k} = {v:.6e}");
-    }
-    print_checks(&summary.checks);
-    println!(
-        "output: {}  (summary.json, mpm.h5 + mpm.xdmf, pictures/)",
-        out.display()
-    );
-    if let Some(e) = &summary.error {
-        eprintln!("error: {e}");
-    }
-    match summary.status {
-        Status::ChecksFailed => eprintln!("error: at least one check failed"),
-        Status::Interrupted => eprintln!(
-            "stopped by SIGTERM at step {}; continue with --restart {}",
-            summary.steps,
-            out.join("checkpoint.h5").display()
-        ),
-        _ => {}
-    }
-    Ok(exit_code(summary.status))
+    let outcome = Outcome {
+        results: &summary.results,
+        checks: &summary.checks,
+        files: "mpm.h5 + mpm.xdmf",
+        error: summary.error.as_deref(),
+        status: summary.status,
+        steps: summary.steps,
+    };
+    Ok(report(&outcome, &out))
 }

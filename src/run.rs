@@ -42,6 +42,21 @@ pub struct RunOptions {
     pub restart: Option<PathBuf>,
 }
 
+impl RunOptions {
+    /// Options of a particle run (grains or MPM): no fluid overrides.
+    pub fn particles(out_dir: PathBuf, progress: bool, restart: Option<PathBuf>) -> Self {
+        RunOptions {
+            out_dir,
+            precision: None,
+            backend: None,
+            gpu_storage: None,
+            steps: None,
+            progress,
+            restart,
+        }
+    }
+}
+
 /// Why a run could not start or finish writing.
 #[derive(Debug, Error)]
 pub enum RunError {

@@ -2,7 +2,8 @@
 """Write the MPM column-collapse scenes: a in {0.5, 1, 2, 4, 8} at the sweep resolution
 (L_i = 0.1 m, 4 mm cells = 25 across the column, 2x2 points per cell, GIMP, USF, FLIP
 blended with 5 % PIC), plus the study at a = 2 and 4: 2 mm cells, linear shape functions
-(at both resolutions), 4x4 points per cell, and pure FLIP.
+(at both resolutions), 4x4 points per cell, and pure FLIP; and every a with a rough (no-slip)
+base instead of the Coulomb one.
 
 Material (seed study Table 4.1; ../shared/reference/README.md): glass beads, friction angle
 22.2 deg from the repose angle, no dilatancy, no cohesion, E = 1.98 MPa, rho = 1925 kg/m^3,
@@ -26,7 +27,8 @@ PHI = 22.2
 SEP = 1.15
 
 
-def scene(a, h=0.004, ppc=2, shape="gimp", update="usf", li=0.1, title_extra="", avg=True, pic=0.05):
+def scene(a, h=0.004, ppc=2, shape="gimp", update="usf", li=0.1, title_extra="", avg=True, pic=0.05,
+          base=None):
     hi = a * li
     # Run-out room: 2x the experiments' law plus margin; flows stop by ~6 tau_c.
     runout = (1.2 * a if a < 2.3 else 1.9 * a ** (2 / 3)) * li
@@ -57,7 +59,7 @@ courant = 0.5
 [mpm.boundaries]
 left = {{ kind = "frictional", friction = {WALL_MU:.4f} }}
 right = {{ kind = "roller" }}
-bottom = {{ kind = "frictional", friction = {WALL_MU:.4f} }}
+bottom = {base or f'{{ kind = "frictional", friction = {WALL_MU:.4f} }}'}
 top = {{ kind = "open" }}
 
 [[mpm.materials]]
@@ -105,6 +107,11 @@ def main():
     files = {}
     for a in [0.5, 1, 2, 4, 8]:
         files[f"a{a:g}.toml"] = scene(a)
+    for a in [0.5, 1, 2, 4, 8]:
+        files[f"a{a:g}-rough.toml"] = scene(a, base='{ kind = "fixed" }', title_extra=" (rough, no-slip base)")
+    for a in [0.5, 1, 2]:
+        files[f"a{a:g}-h2mm-rough.toml"] = scene(a, h=0.002, base='{ kind = "fixed" }',
+                                                 title_extra=" (2 mm cells, rough base)")
     files["a0.5-h2mm.toml"] = scene(0.5, h=0.002, title_extra=" (2 mm cells)")
     files["a1-h2mm.toml"] = scene(1, h=0.002, title_extra=" (2 mm cells)")
     for a in [2, 4]:

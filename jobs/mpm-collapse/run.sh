@@ -14,7 +14,8 @@ out=runs/mpm-collapse
 mkdir -p "$out"
 names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
-  names=(a0.5 a1 a2 a4 a8 a0.5-h2mm a1-h2mm a2-h2mm a2-linear a2-h2mm-linear a2-ppc4 a2-flip
+  names=(a0.5 a1 a2 a4 a8 a0.5-rough a1-rough a2-rough a4-rough a8-rough
+         a0.5-h2mm a1-h2mm a2-h2mm a0.5-h2mm-rough a1-h2mm-rough a2-h2mm-rough a2-linear a2-h2mm-linear a2-ppc4 a2-flip
          a4-h2mm a4-linear a4-h2mm-linear a4-ppc4 a4-flip)
 fi
 for name in "${names[@]}"; do

@@ -340,3 +340,35 @@ pub fn read<T: H5Type + Copy + Default>(
         populations,
     })
 }
+
+/// The header of a particle checkpoint: `format`, `grainflow_version` and `format_version`
+/// attributes, then the named u64 and f64 counters, on the file's root.
+pub fn write_header(
+    file: &hdf5::File,
+    (format, version): (&str, u32),
+    ints: &[(&str, u64)],
+    reals: &[(&str, f64)],
+) -> hdf5::Result<()> {
+    for (name, v) in [
+        ("format", format),
+        ("grainflow_version", env!("CARGO_PKG_VERSION")),
+    ] {
+        file.new_attr::<VarLenUnicode>()
+            .create(name)
+            .and_then(|a| a.write_scalar(&vlu(v)))?;
+    }
+    file.new_attr::<u32>()
+        .create("format_version")
+        .and_then(|a| a.write_scalar(&version))?;
+    for (name, v) in ints {
+        file.new_attr::<u64>()
+            .create(*name)
+            .and_then(|a| a.write_scalar(v))?;
+    }
+    for (name, v) in reals {
+        file.new_attr::<f64>()
+            .create(*name)
+            .and_then(|a| a.write_scalar(v))?;
+    }
+    Ok(())
+}

@@ -6,7 +6,7 @@
 //! tangential springs and uses the half-step velocities, which are gone: with the stored
 //! forces a restarted run continues bit for bit.
 
-use super::checkpoint::write_atomically;
+use super::checkpoint::{write_atomically, write_header};
 use super::h5par::{self, write_rows, Access};
 use super::OutputError;
 use crate::dem::system::HistoryMap;
@@ -86,31 +86,16 @@ pub fn write(
     let mut migrated = [run.migrated as f64];
     comm.sum_f64(&mut migrated);
     let fill = |file: &hdf5::File, access: Access| -> hdf5::Result<()> {
-        let text = |name: &str, v: &str| {
-            let v: VarLenUnicode = v.parse().expect("ASCII attribute");
-            file.new_attr::<VarLenUnicode>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&v))
-        };
-        text("format", FORMAT)?;
-        text("grainflow_version", env!("CARGO_PKG_VERSION"))?;
-        file.new_attr::<u32>()
-            .create("format_version")
-            .and_then(|a| a.write_scalar(&FORMAT_VERSION))?;
-        for (name, v) in [("step", run.step), ("settle_steps", run.settle_steps)] {
-            file.new_attr::<u64>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&v))?;
-        }
-        for (name, v) in [
-            ("time_s", run.time_s),
-            ("next_output_s", run.next_output_s),
-            ("migrated", migrated[0]),
-        ] {
-            file.new_attr::<f64>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&v))?;
-        }
+        write_header(
+            file,
+            (FORMAT, FORMAT_VERSION),
+            &[("step", run.step), ("settle_steps", run.settle_steps)],
+            &[
+                ("time_s", run.time_s),
+                ("next_output_s", run.next_output_s),
+                ("migrated", migrated[0]),
+            ],
+        )?;
         let dem = file.create_group("dem")?;
         write_rows(&dem, "grains", &rows, ROW, comm, access)?;
         write_rows(&dem, "history", &history, 3, comm, access)?;

@@ -58,16 +58,8 @@ impl GrainWriter {
             root: comm.is_root(),
             written: Vec::new(),
         };
-        if let Some(kept) = kept {
-            for (group, _) in kept {
-                let g = w.file.group(&group).map_err(h5)?;
-                let time = g
-                    .attr("time_s")
-                    .and_then(|a| a.read_scalar::<f64>())
-                    .map_err(h5)?;
-                let n = g.dataset("id").map_err(h5)?.shape()[0] as u64;
-                w.written.push((group, time, n));
-            }
+        if kept.is_some() {
+            w.written = h5par::kept_snapshots(&w.file, kept).map_err(h5)?;
             if w.root {
                 w.write_xdmf()?;
             }

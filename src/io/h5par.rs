@@ -255,3 +255,19 @@ pub fn write_rows(
     write_block(&ds, &block, local, access)?;
     Ok(ds)
 }
+
+/// (group, time, rows of its `id` dataset) of the snapshot groups a restart keeps (see
+/// [`open_series`]), in order; each group carries a `time_s` attribute.
+pub fn kept_snapshots(
+    file: &hdf5::File,
+    kept: Option<KeptGroups>,
+) -> hdf5::Result<Vec<(String, f64, u64)>> {
+    let mut out = Vec::new();
+    for (group, _) in kept.unwrap_or_default() {
+        let g = file.group(&group)?;
+        let time = g.attr("time_s").and_then(|a| a.read_scalar::<f64>())?;
+        let n = g.dataset("id")?.shape()[0] as u64;
+        out.push((group, time, n));
+    }
+    Ok(out)
+}

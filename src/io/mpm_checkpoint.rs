@@ -3,7 +3,7 @@
 //! The grid holds nothing between steps, so the points and the clock are the whole state
 //! and a restarted run continues bit for bit.
 
-use super::checkpoint::write_atomically;
+use super::checkpoint::{write_atomically, write_header};
 use super::h5par::{self, write_rows, Access};
 use super::OutputError;
 use crate::mpm::points::PACKED;
@@ -60,32 +60,17 @@ pub fn write(
         p.pack(i, &mut rows);
     }
     let fill = |file: &hdf5::File, access: Access| -> hdf5::Result<()> {
-        let text = |name: &str, v: &str| {
-            let v: VarLenUnicode = v.parse().expect("ASCII attribute");
-            file.new_attr::<VarLenUnicode>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&v))
-        };
-        text("format", FORMAT)?;
-        text("grainflow_version", env!("CARGO_PKG_VERSION"))?;
-        file.new_attr::<u32>()
-            .create("format_version")
-            .and_then(|a| a.write_scalar(&FORMAT_VERSION))?;
-        for (name, v) in [("step", run.step), ("migrated", run.migrated)] {
-            file.new_attr::<u64>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&v))?;
-        }
-        for (name, v) in [
-            ("time_s", run.time_s),
-            ("next_output_s", run.next_output_s),
-            ("initial_length_m", run.initial_shape_m[0]),
-            ("initial_height_m", run.initial_shape_m[1]),
-        ] {
-            file.new_attr::<f64>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&v))?;
-        }
+        write_header(
+            file,
+            (FORMAT, FORMAT_VERSION),
+            &[("step", run.step), ("migrated", run.migrated)],
+            &[
+                ("time_s", run.time_s),
+                ("next_output_s", run.next_output_s),
+                ("initial_length_m", run.initial_shape_m[0]),
+                ("initial_height_m", run.initial_shape_m[1]),
+            ],
+        )?;
         let g = file.create_group("mpm")?;
         write_rows(&g, "points", &rows, PACKED, comm, access)?;
         Ok(())

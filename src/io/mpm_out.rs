@@ -62,15 +62,7 @@ impl MpmWriter {
             written: Vec::new(),
             grid: ([spec.nx + 1, spec.ny + 1], spec.h),
         };
-        for (group, _) in kept.unwrap_or_default() {
-            let g = w.file.group(&group).map_err(h5)?;
-            let time = g
-                .attr("time_s")
-                .and_then(|a| a.read_scalar::<f64>())
-                .map_err(h5)?;
-            let n = g.dataset("id").map_err(h5)?.shape()[0] as u64;
-            w.written.push((group, time, n));
-        }
+        w.written = h5par::kept_snapshots(&w.file, kept).map_err(h5)?;
         if w.root && !w.written.is_empty() {
             w.write_xdmf()?;
         }

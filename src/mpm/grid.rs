@@ -110,7 +110,8 @@ pub struct NodeFields {
     pub mom: Vec<[f64; 2]>,
     /// Internal plus external force (N/m).
     pub force: Vec<[f64; 2]>,
-    /// Velocity before the update, boundary conditions applied (m/s).
+    /// Velocity p/m as mapped from the points, before the update and without boundary
+    /// conditions (m/s).
     pub v_old: Vec<[f64; 2]>,
     /// Velocity after the update, boundary conditions applied (m/s).
     pub v_new: Vec<[f64; 2]>,

@@ -39,16 +39,17 @@ fn constrain(b: &Boundaries, spec: &GridSpec, i: i64, j: i64, v: &mut [f64; 2]) 
     }
 }
 
-/// Nodal velocities from momentum, `v_old = p/m` with boundary conditions, over the node
-/// columns `node_cols`; written to `v_old` (and `v_new` when `into_new`, used by MUSL's
-/// remapped velocity).
+/// Nodal velocities from momentum over the node columns `node_cols`: `v_old = p/m` as
+/// mapped (no boundary condition: the FLIP increment v_new − v_old must carry the whole
+/// effect of the walls, the impact of material landing on a frictional floor included) and
+/// `v_new` = `v_old` with the boundary conditions (the velocity field a USF stress update or
+/// MUSL's remap uses; the momentum update overwrites it).
 pub fn velocities(
     nodes: &mut NodeFields,
     spec: &GridSpec,
     b: &Boundaries,
     min_mass: f64,
     node_cols: std::ops::Range<i64>,
-    into_new: bool,
 ) {
     let rows = spec.rows();
     let first = (node_cols.start + 1) as usize;
@@ -61,16 +62,16 @@ pub fn velocities(
         active,
         ..
     } = nodes;
-    let target = if into_new { v_new } else { v_old };
     (
         mass[range.clone()].par_chunks(rows),
         mom[range.clone()].par_chunks(rows),
-        target[range].par_chunks_mut(rows),
+        v_old[range.clone()].par_chunks_mut(rows),
+        v_new[range].par_chunks_mut(rows),
     )
         .into_par_iter()
         .with_max_len(2)
         .enumerate()
-        .for_each(|(n, (m, p, v))| {
+        .for_each(|(n, (m, p, vo, vn))| {
             let i = node_cols.start + n as i64;
             let (r0, r1) = active[first + n];
             for r in r0 as usize..r1 as usize {
@@ -79,14 +80,17 @@ pub fn velocities(
                 } else {
                     [0.0; 2]
                 };
+                vo[r] = vel;
                 constrain(b, spec, i, r as i64 - 1, &mut vel);
-                v[r] = vel;
+                vn[r] = vel;
             }
         });
 }
 
 /// The momentum update on the nodes: `v_new = v_old + dt (f_int + m g + f_damp) / m`, then
-/// the boundary conditions. Requires `v_old` (from [`velocities`]) and the forces.
+/// the boundary conditions, which see the whole normal velocity into a wall (the incoming
+/// momentum and this step's forces), so Coulomb friction acts on the whole normal impulse.
+/// Requires `v_old` (from [`velocities`]) and the forces.
 pub fn update_nodes(
     nodes: &mut NodeFields,
     spec: &GridSpec,

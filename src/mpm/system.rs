@@ -288,10 +288,10 @@ impl MpmSystem {
             Scheme::Usl => {
                 self.p2g(P2g::All, comm);
                 lap(&mut self.seconds, 1);
-                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone(), false);
+                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone());
                 update_nodes(&mut self.nodes, &spec, &b, &u, cols);
                 lap(&mut self.seconds, 2);
-                self.stress_sweep(false);
+                self.stress_sweep();
                 lap(&mut self.seconds, 3);
                 self.g2p();
                 lap(&mut self.seconds, 4);
@@ -299,9 +299,9 @@ impl MpmSystem {
             Scheme::Usf => {
                 self.p2g(P2g::MassMomentum, comm);
                 lap(&mut self.seconds, 1);
-                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone(), false);
+                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone());
                 lap(&mut self.seconds, 2);
-                self.stress_sweep(true);
+                self.stress_sweep();
                 lap(&mut self.seconds, 3);
                 self.p2g(P2g::Force, comm);
                 lap(&mut self.seconds, 1);
@@ -313,7 +313,7 @@ impl MpmSystem {
             Scheme::Musl => {
                 self.p2g(P2g::All, comm);
                 lap(&mut self.seconds, 1);
-                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone(), false);
+                velocities(&mut self.nodes, &spec, &b, min_mass, cols.clone());
                 update_nodes(&mut self.nodes, &spec, &b, &u, cols.clone());
                 lap(&mut self.seconds, 2);
                 self.g2p();
@@ -321,9 +321,9 @@ impl MpmSystem {
                 // Remap the updated point momenta (old positions) to the grid.
                 self.p2g(P2g::MassMomentum, comm);
                 lap(&mut self.seconds, 1);
-                velocities(&mut self.nodes, &spec, &b, min_mass, cols, true);
+                velocities(&mut self.nodes, &spec, &b, min_mass, cols);
                 lap(&mut self.seconds, 2);
-                self.stress_sweep(false);
+                self.stress_sweep();
                 lap(&mut self.seconds, 3);
             }
         }
@@ -361,18 +361,15 @@ impl MpmSystem {
         })
     }
 
-    fn stress_sweep(&mut self, old: bool) {
+    /// Stress update from the constrained nodal velocity `v_new` (the mapped one for USF
+    /// and MUSL's remap, the updated one for USL).
+    fn stress_sweep(&mut self) {
         let it = Interp {
             spec: &self.setup.spec,
             kind: self.setup.shape,
             columns: &self.columns,
         };
-        let v = if old {
-            &self.nodes.v_old
-        } else {
-            &self.nodes.v_new
-        };
-        velocity_gradients(&self.points, &it, v, &mut self.grads);
+        velocity_gradients(&self.points, &it, &self.nodes.v_new, &mut self.grads);
         if self.setup.volumetric_averaging {
             average_volumetric(&self.points, &self.columns, &mut self.grads);
         }
