@@ -6,7 +6,7 @@ Reads runs/mpm-collapse/<name>/summary.json (jobs/mpm-collapse/run.sh): the main
 a<a> (2 mm cells, GIMP, 2x2 points per cell); the study runs are a<a>-h4mm, -linear, -ppc4.
 Prints a table of (L_f - L_i)/L_i and H_f/L_i against the experiments' law (Lajeunesse et
 al. 2005) and the 2-D DEM law, the study's differences, and draws run-out vs a on log axes
-with the DEM sweep of issue 5 (runs/column-collapse if present, else its committed table).
+with the DEM sweep of issue 5 (its committed table, jobs/column-collapse/README.md).
 """
 import argparse
 import glob
@@ -35,23 +35,6 @@ def load(folder):
             continue
         runs[os.path.basename(os.path.dirname(f))] = s
     return runs
-
-
-def dem_sweep():
-    root = os.path.join(os.path.dirname(__file__), "..", "runs", "column-collapse")
-    got = {}
-    for f in glob.glob(os.path.join(root, "*", "summary.json")):
-        r = json.load(open(f))["results"]
-        if "collapse.runout" in r:
-            got.setdefault(round(r["collapse.aspect_ratio"], 1), []).append(r["collapse.runout"])
-    if not got:
-        return DEM_SWEEP
-    rows = []
-    for a, v in sorted(got.items()):
-        m = sum(v) / len(v)
-        sd = (sum((x - m) ** 2 for x in v) / max(len(v) - 1, 1)) ** 0.5
-        rows.append((a, m, sd))
-    return rows
 
 
 def main():
@@ -94,7 +77,7 @@ def main():
     xs = [0.4 * 1.05 ** i for i in range(60)]
     ax.loglog(xs, [law(a, EXP) for a in xs], "k-", label="experiments (Lajeunesse et al. 2005)")
     ax.loglog(xs, [law(a, DEM) for a in xs], "k--", label="published 2-D DEM law")
-    dem = dem_sweep()
+    dem = DEM_SWEEP
     ax.errorbar([d[0] for d in dem], [d[1] for d in dem], yerr=[d[2] for d in dem], fmt="s",
                 color="tab:blue", label="grainflow DEM (disks)")
     ax.loglog([a for a, _ in main_rows], [r for _, r in main_rows], "o", color="tab:red",
