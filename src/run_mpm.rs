@@ -8,7 +8,7 @@ use crate::analysis::Results;
 use crate::io::atomic::{ensure_writable_dir, write_atomic};
 use crate::io::mpm_checkpoint::{self, MpmRunState};
 use crate::io::mpm_out::{write_mpm_png, MpmWriter};
-use crate::mpm::{MpmSystem, Points, MPM_STAGES};
+use crate::mpm::{MpmError, MpmSystem, Points, MPM_STAGES};
 use crate::progress::Progress;
 use crate::run::{stage_stats, RunError, RunOptions, StageStats, Status};
 use crate::scene::{GrainAnalysis, MpmScene, PictureField, ValidMpmScene};
@@ -136,6 +136,20 @@ pub fn deposit_shape(
     }
 }
 
+/// The message of the rank that failed (collective): every rank stops together, but only
+/// the one holding the offending point can name it.
+fn first_error(e: &MpmError, comm: &dyn Comm) -> String {
+    let own = match e {
+        MpmError::Elsewhere { .. } => String::new(),
+        other => other.to_string(),
+    };
+    let all = comm.all_gather_bytes(format!("{own}\0").as_bytes());
+    all.split(|&b| b == 0)
+        .map(|m| String::from_utf8_lossy(m).into_owned())
+        .find(|m| !m.is_empty())
+        .unwrap_or_else(|| e.to_string())
+}
+
 /// Run an MPM scene on every rank of `comm` (collective). Writes `mpm.h5` + `mpm.xdmf`,
 /// `pictures/mpm_*.png` and (rank 0) `summary.json` into `opts.out_dir`.
 pub fn run_mpm(
@@ -240,7 +254,7 @@ pub fn run_mpm(
     while sys.steps < total_steps {
         if let Err(e) = sys.step(comm) {
             status = Status::Unstable;
-            error = Some(e.to_string());
+            error = Some(first_error(&e, comm));
             break;
         }
         let step = sys.steps;

@@ -83,9 +83,15 @@ fn mpm_run_writes_hdf5_xdmf_pictures_and_summary() {
 }
 
 /// A run that goes unstable stops with the step and the point, keeps its snapshots and
-/// writes a summary with status "unstable".
+/// writes a summary with status "unstable" — on 2 ranks too, where rank 0 reports the
+/// message of the rank that holds the point.
 #[test]
 fn unstable_run_stops_with_step_and_point() {
+    unstable_on(1);
+    unstable_on(2);
+}
+
+fn unstable_on(ranks: usize) {
     let tmp = tempfile::tempdir().unwrap();
     // Without separation, points stretched at the front of the flow carry stress at many
     // times their volume: their wave speed breaks the CFL limit.
@@ -100,7 +106,21 @@ fn unstable_run_stops_with_step_and_point() {
     let scene = tmp.path().join("unstable.toml");
     std::fs::write(&scene, text).unwrap();
     let out = tmp.path().join("out");
-    let (o, s) = run(&scene, &out);
+    let o = common::on_ranks(ranks, BIN)
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--quiet",
+            "--threads",
+            "1",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    eprintln!("{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert!(!o.status.success());
     assert_eq!(s["status"], "unstable");
     let err = s["error"].as_str().unwrap();
