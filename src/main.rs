@@ -90,10 +90,7 @@ fn real_main() -> Result<i32> {
                         "  grid: {} × {} cells of {} m; {:?} shape functions, {:?} update",
                         spec.nx, spec.ny, spec.h, m.setup.shape, m.setup.scheme
                     );
-                    println!(
-                        "  material points: {}",
-                        m.points().map(|p| p.len()).unwrap_or(0)
-                    );
+                    println!("  material points: {}", m.points.len());
                     println!(
                         "  time step: {:.4e} s (CFL limit {:.4e} s)",
                         m.setup.dt, m.critical_dt

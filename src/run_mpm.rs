@@ -176,7 +176,7 @@ pub fn run_mpm(
     });
     let (points, resume) = match restored {
         Some(r) => (r.points, Some(r.run)),
-        None => (scene.points()?, None),
+        None => (scene.points.clone(), None),
     };
     let mut sys = MpmSystem::new(scene.setup.clone(), points, comm)?;
     let initial_shape = match (&resume, collapse) {

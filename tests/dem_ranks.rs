@@ -16,19 +16,7 @@ fn run(ranks: usize, out: &Path) {
 }
 
 fn run_scene(ranks: usize, scene: &Path, out: &Path, extra: &[&str]) {
-    let o = common::on_ranks(ranks, BIN)
-        .args([
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .args(["--quiet", "--threads", "1"])
-        .args(extra)
-        .output()
-        .expect("grainflow or mpirun starts");
-    eprintln!("{}", String::from_utf8_lossy(&o.stderr));
-    assert!(o.status.success(), "{ranks} ranks failed: {:?}", o.status);
+    common::run_on_ranks(ranks, BIN, scene, out, extra);
 }
 
 /// One snapshot: group, ids sorted, every dataset's rows reordered by id.

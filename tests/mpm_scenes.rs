@@ -50,7 +50,7 @@ fn mpm_run_writes_hdf5_xdmf_pictures_and_summary() {
     ] {
         assert_eq!(last.dataset(name).unwrap().shape(), shape, "{name}");
     }
-    assert_eq!(last.dataset("grid/mass").unwrap().shape(), vec![25, 81]);
+    assert_eq!(last.dataset("grid/mass").unwrap().shape(), vec![27, 83]);
     let mass: f64 = last
         .dataset("grid/mass")
         .unwrap()
@@ -126,17 +126,15 @@ fn unstable_on(ranks: usize) {
     let err = s["error"].as_str().unwrap();
     assert!(
         err.contains("step") && err.contains("material point"),
-        "{err}"
+        "{ranks} ranks: {err}"
     );
-    assert!(
-        f64::from(
-            hdf5::File::open(out.join("mpm.h5"))
-                .unwrap()
-                .member_names()
-                .unwrap()
-                .len() as u32
-        ) >= 1.0
-    );
+    // Rank 0 reports the failing rank's message, not its own "another rank failed".
+    assert!(!err.contains("another rank"), "{ranks} ranks: {err}");
+    let kept = hdf5::File::open(out.join("mpm.h5"))
+        .unwrap()
+        .member_names()
+        .unwrap();
+    assert!(!kept.is_empty(), "no snapshot kept");
 }
 
 /// `grainflow check` refuses the scene and names every string of `expect`.

@@ -372,3 +372,88 @@ pub fn write_header(
     }
     Ok(())
 }
+
+/// A particle checkpoint opened for reading, its `format` and `format_version` checked.
+pub struct CheckedFile<'a> {
+    /// The open file (every rank).
+    pub file: hdf5::File,
+    path: &'a Path,
+}
+
+impl CheckedFile<'_> {
+    /// The error for an HDF5 failure while reading this file.
+    pub fn bad(&self, e: hdf5::Error) -> OutputError {
+        err(
+            self.path,
+            format!("unreadable (truncated, or not a grainflow checkpoint): {e}"),
+        )
+    }
+    /// A u64 attribute of the root.
+    pub fn u64(&self, name: &str) -> Result<u64, OutputError> {
+        self.file
+            .attr(name)
+            .and_then(|a| a.read_scalar::<u64>())
+            .map_err(|e| self.bad(e))
+    }
+    /// An f64 attribute of the root.
+    pub fn f64(&self, name: &str) -> Result<f64, OutputError> {
+        self.file
+            .attr(name)
+            .and_then(|a| a.read_scalar::<f64>())
+            .map_err(|e| self.bad(e))
+    }
+    /// A `[rows, cols]` f64 dataset, its width checked.
+    pub fn rows(&self, name: &str, cols: usize) -> Result<Vec<f64>, OutputError> {
+        let ds = self.file.dataset(name).map_err(|e| self.bad(e))?;
+        if ds.ndim() != 2 || ds.shape()[1] != cols {
+            return Err(err(self.path, format!("/{name} must have {cols} columns")));
+        }
+        ds.read_raw::<f64>().map_err(|e| self.bad(e))
+    }
+}
+
+/// Open the particle checkpoint `path` written by [`write_header`] with `(format,
+/// version)`, on every rank (collective). `run` names the kind of run in messages
+/// ("a grains", "an MPM").
+pub fn open_checked<'a>(
+    path: &'a Path,
+    comm: &dyn Comm,
+    (format, version): (&str, u32),
+    run: &str,
+) -> Result<CheckedFile<'a>, OutputError> {
+    if !path.is_file() {
+        return Err(err(
+            path,
+            format!("no such file; give the checkpoint.h5 of {run} run"),
+        ));
+    }
+    let bad = |e: hdf5::Error| {
+        err(
+            path,
+            format!("unreadable (truncated, or not a grainflow checkpoint): {e}"),
+        )
+    };
+    let (file, _) = h5par::open(path, comm, false).map_err(bad)?;
+    let found = file
+        .attr("format")
+        .and_then(|a| a.read_scalar::<VarLenUnicode>())
+        .map_err(bad)?
+        .to_string();
+    if found != format {
+        return Err(err(
+            path,
+            format!("a `{found}` file, not {run} checkpoint; restart {run} scene from the checkpoint.h5 its run wrote"),
+        ));
+    }
+    let v = file
+        .attr("format_version")
+        .and_then(|a| a.read_scalar::<u32>())
+        .map_err(bad)?;
+    if v != version {
+        return Err(err(
+            path,
+            format!("format version {v}, this grainflow reads {version}"),
+        ));
+    }
+    Ok(CheckedFile { file, path })
+}

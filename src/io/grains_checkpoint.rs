@@ -6,13 +6,12 @@
 //! tangential springs and uses the half-step velocities, which are gone: with the stored
 //! forces a restarted run continues bit for bit.
 
-use super::checkpoint::{write_atomically, write_header};
-use super::h5par::{self, write_rows, Access};
+use super::checkpoint::{open_checked, write_atomically, write_header};
+use super::h5par::{write_rows, Access};
 use super::OutputError;
 use crate::dem::system::HistoryMap;
 use crate::dem::{Grains, SlabDem, Wall};
 use decomposition::Comm;
-use hdf5::types::VarLenUnicode;
 use std::path::Path;
 
 /// `format` attribute of a grains checkpoint.
@@ -117,57 +116,9 @@ pub fn write(
 /// Read a grains checkpoint (every rank reads everything). `walls` is the scene's wall
 /// count, which the file must match. Collective.
 pub fn read(path: &Path, comm: &dyn Comm, walls: usize) -> Result<RestoredGrains, OutputError> {
-    if !path.is_file() {
-        return Err(err(
-            path,
-            "no such file; give the checkpoint.h5 of a grains run",
-        ));
-    }
-    let bad = |e: hdf5::Error| {
-        err(
-            path,
-            format!("unreadable (truncated, or not a grainflow checkpoint): {e}"),
-        )
-    };
-    let (file, _) = h5par::open(path, comm, false).map_err(bad)?;
-    let format = file
-        .attr("format")
-        .and_then(|a| a.read_scalar::<VarLenUnicode>())
-        .map_err(bad)?
-        .to_string();
-    if format != FORMAT {
-        return Err(err(
-            path,
-            format!("a `{format}` file, not a grains checkpoint; restart a grains scene from the checkpoint.h5 its run wrote"),
-        ));
-    }
-    let version = file
-        .attr("format_version")
-        .and_then(|a| a.read_scalar::<u32>())
-        .map_err(bad)?;
-    if version != FORMAT_VERSION {
-        return Err(err(
-            path,
-            format!("format version {version}, this grainflow reads {FORMAT_VERSION}"),
-        ));
-    }
-    let u = |n: &str| {
-        file.attr(n)
-            .and_then(|a| a.read_scalar::<u64>())
-            .map_err(bad)
-    };
-    let f = |n: &str| {
-        file.attr(n)
-            .and_then(|a| a.read_scalar::<f64>())
-            .map_err(bad)
-    };
-    let data = |n: &str, cols: usize| -> Result<Vec<f64>, OutputError> {
-        let ds = file.dataset(&format!("dem/{n}")).map_err(bad)?;
-        if ds.ndim() != 2 || ds.shape()[1] != cols {
-            return Err(err(path, format!("/dem/{n} must have {cols} columns")));
-        }
-        ds.read_raw::<f64>().map_err(bad)
-    };
+    let c = open_checked(path, comm, (FORMAT, FORMAT_VERSION), "a grains")?;
+    let (u, f) = (|n: &str| c.u64(n), |n: &str| c.f64(n));
+    let data = |n: &str, cols: usize| c.rows(&format!("dem/{n}"), cols);
     let rows = data("grains", ROW)?;
     let mut sorted: Vec<&[f64]> = rows.chunks_exact(ROW).collect();
     sorted.sort_by_key(|r| r[9].to_bits());

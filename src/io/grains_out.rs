@@ -196,25 +196,14 @@ impl GrainWriter {
     fn write_xdmf(&self) -> Result<(), OutputError> {
         let mut s = String::from("<?xml version=\"1.0\" ?>\n<Xdmf Version=\"2.0\">\n <Domain>\n  <Grid Name=\"grains\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
         for (group, t, n) in &self.written {
-            let _ = write!(
-                s,
-                "   <Grid Name=\"{group}\" GridType=\"Uniform\">\n    <Time Value=\"{t:e}\"/>\n    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{n}\"/>\n    <Geometry GeometryType=\"XYZ\">\n     <DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">grains.h5:/{group}/position</DataItem>\n    </Geometry>\n"
+            super::xdmf::open_points_grid(
+                &mut s,
+                "   ",
+                group,
+                ("grains.h5", group, *n),
+                &DATASETS,
             );
-            for (name, comps, _) in DATASETS.iter().skip(1) {
-                let (kind, dims) = if *comps == 1 {
-                    ("Scalar", format!("{n}"))
-                } else {
-                    ("Vector", format!("{n} 3"))
-                };
-                let _ = write!(
-                    s,
-                    "    <Attribute Name=\"{name}\" AttributeType=\"{kind}\" Center=\"Node\">\n     <DataItem Dimensions=\"{dims}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">grains.h5:/{group}/{name}</DataItem>\n    </Attribute>\n"
-                );
-            }
-            let _ = write!(
-                s,
-                "    <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Node\">\n     <DataItem Dimensions=\"{n}\" NumberType=\"UInt\" Precision=\"8\" Format=\"HDF\">grains.h5:/{group}/id</DataItem>\n    </Attribute>\n   </Grid>\n"
-            );
+            let _ = write!(s, "    <Time Value=\"{t:e}\"/>\n   </Grid>\n");
         }
         s.push_str("  </Grid>\n </Domain>\n</Xdmf>\n");
         write_atomic(&self.path.with_extension("xdmf"), s.as_bytes())

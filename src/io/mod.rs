@@ -13,6 +13,7 @@ pub mod mpm_checkpoint;
 pub mod mpm_out;
 pub mod picture;
 pub mod probes;
+pub mod xdmf;
 
 use thiserror::Error;
 

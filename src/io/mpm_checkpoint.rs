@@ -3,13 +3,12 @@
 //! The grid holds nothing between steps, so the points and the clock are the whole state
 //! and a restarted run continues bit for bit.
 
-use super::checkpoint::{write_atomically, write_header};
-use super::h5par::{self, write_rows, Access};
+use super::checkpoint::{open_checked, write_atomically, write_header};
+use super::h5par::{write_rows, Access};
 use super::OutputError;
 use crate::mpm::points::PACKED;
 use crate::mpm::{MpmSystem, Points};
 use decomposition::Comm;
-use hdf5::types::VarLenUnicode;
 use std::path::Path;
 
 /// `format` attribute of an MPM checkpoint.
@@ -38,13 +37,6 @@ pub struct RestoredMpm {
     pub run: MpmRunState,
     /// Every point, sorted by id.
     pub points: Points,
-}
-
-fn err(path: &Path, message: impl Into<String>) -> OutputError {
-    OutputError::Checkpoint {
-        path: path.to_owned(),
-        message: message.into(),
-    }
 }
 
 /// Write the checkpoint of `sys` to `path` (collective, atomic).
@@ -80,52 +72,9 @@ pub fn write(
 
 /// Read an MPM checkpoint (every rank reads every point). Collective.
 pub fn read(path: &Path, comm: &dyn Comm) -> Result<RestoredMpm, OutputError> {
-    if !path.is_file() {
-        return Err(err(
-            path,
-            "no such file; give the checkpoint.h5 of an MPM run",
-        ));
-    }
-    let bad = |e: hdf5::Error| {
-        err(
-            path,
-            format!("unreadable (truncated, or not a grainflow checkpoint): {e}"),
-        )
-    };
-    let (file, _) = h5par::open(path, comm, false).map_err(bad)?;
-    let format = file
-        .attr("format")
-        .and_then(|a| a.read_scalar::<VarLenUnicode>())
-        .map_err(bad)?
-        .to_string();
-    if format != FORMAT {
-        return Err(err(path, format!("a `{format}` file, not an MPM checkpoint; restart an MPM scene from the checkpoint.h5 its run wrote")));
-    }
-    let version = file
-        .attr("format_version")
-        .and_then(|a| a.read_scalar::<u32>())
-        .map_err(bad)?;
-    if version != FORMAT_VERSION {
-        return Err(err(
-            path,
-            format!("format version {version}, this grainflow reads {FORMAT_VERSION}"),
-        ));
-    }
-    let u = |n: &str| {
-        file.attr(n)
-            .and_then(|a| a.read_scalar::<u64>())
-            .map_err(bad)
-    };
-    let f = |n: &str| {
-        file.attr(n)
-            .and_then(|a| a.read_scalar::<f64>())
-            .map_err(bad)
-    };
-    let ds = file.dataset("mpm/points").map_err(bad)?;
-    if ds.ndim() != 2 || ds.shape()[1] != PACKED {
-        return Err(err(path, format!("/mpm/points must have {PACKED} columns")));
-    }
-    let rows = ds.read_raw::<f64>().map_err(bad)?;
+    let c = open_checked(path, comm, (FORMAT, FORMAT_VERSION), "an MPM")?;
+    let (u, f) = (|n: &str| c.u64(n), |n: &str| c.f64(n));
+    let rows = c.rows("mpm/points", PACKED)?;
     let mut sorted: Vec<&[f64]> = rows.chunks_exact(PACKED).collect();
     sorted.sort_by_key(|r| r[0].to_bits());
     let mut points = Points::default();

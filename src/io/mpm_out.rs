@@ -16,7 +16,8 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 /// Point datasets of a snapshot: name, components, units. Each snapshot also holds `id`
-/// and the grid group `grid` (`mass`, `velocity` on the (ny+1) × (nx+1) nodes).
+/// and the grid group `grid` (`mass`, `velocity` on the (ny+3) × (nx+3) nodes, padding
+/// included, from (−h, −h)).
 const POINT_DATASETS: [(&str, usize, &str); 6] = [
     ("position", 3, "m"),
     ("velocity", 3, "m/s"),
@@ -60,7 +61,7 @@ impl MpmWriter {
             access,
             root: comm.is_root(),
             written: Vec::new(),
-            grid: ([spec.nx + 1, spec.ny + 1], spec.h),
+            grid: ([spec.cols(), spec.rows()], spec.h),
         };
         w.written = h5par::kept_snapshots(&w.file, kept).map_err(h5)?;
         if w.root && !w.written.is_empty() {
@@ -126,45 +127,54 @@ impl MpmWriter {
         Ok(())
     }
 
-    /// Node mass and velocity, `[ny+1, nx+1(, 3)]`, each rank writing its node columns.
+    /// Node mass and velocity on every node, the padding layer included (so the nodes hold
+    /// exactly the points' mass): `[ny+3, nx+3(, 3)]`, node (I, J) at ((I, J)) h, I, J from
+    /// −1. Each rank writes the node columns of its cell columns (the outer ones at the ends).
     fn write_grid(&self, grp: &hdf5::Group, sys: &MpmSystem) -> hdf5::Result<()> {
         let spec = sys.setup.spec;
         let g = grp.create_group("grid")?;
         let own = sys.own_columns();
-        let last = own.end == spec.nx;
-        let (i0, i1) = (own.start, if last { spec.nx + 1 } else { own.end });
-        let width = i1 - i0;
+        // Storage column k holds node column I = k − 1.
+        let k0 = if own.start == 0 { 0 } else { own.start + 1 };
+        let k1 = if own.end == spec.nx {
+            spec.cols()
+        } else {
+            own.end + 1
+        };
+        let (rows, width) = (spec.rows(), k1 - k0);
         let (mass, vel) = sys.nodes.snapshot(&spec);
-        let mut m = Vec::with_capacity(width * (spec.ny + 1));
-        let mut v = Vec::with_capacity(width * (spec.ny + 1) * 3);
-        for j in 0..=spec.ny {
-            for i in i0..i1 {
-                let k = spec.node(i as i64, j as i64);
-                m.push(mass[k]);
-                v.extend_from_slice(&[vel[k][0], vel[k][1], 0.0]);
+        let mut m = Vec::with_capacity(width * rows);
+        let mut v = Vec::with_capacity(width * rows * 3);
+        for r in 0..rows {
+            for k in k0..k1 {
+                let n = k * rows + r;
+                m.push(mass[n]);
+                v.extend_from_slice(&[vel[n][0], vel[n][1], 0.0]);
             }
         }
-        let rows = spec.ny + 1;
         let dm = g
             .new_dataset::<f64>()
-            .shape([rows, spec.nx + 1])
+            .shape([rows, spec.cols()])
             .create("mass")?;
         let b = Block {
-            start: vec![0, i0 as u64],
+            start: vec![0, k0 as u64],
             count: vec![rows as u64, width as u64],
         };
         h5par::write_block(&dm, &b, &m, self.access)?;
         unit(&dm, "kg/m")?;
         let dv = g
             .new_dataset::<f64>()
-            .shape([rows, spec.nx + 1, 3])
+            .shape([rows, spec.cols(), 3])
             .create("velocity")?;
         let b = Block {
-            start: vec![0, i0 as u64, 0],
+            start: vec![0, k0 as u64, 0],
             count: vec![rows as u64, width as u64, 3],
         };
         h5par::write_block(&dv, &b, &v, self.access)?;
-        unit(&dv, "m/s")
+        unit(&dv, "m/s")?;
+        g.new_attr::<f64>()
+            .create("origin_m")
+            .and_then(|a| a.write_scalar(&-spec.h))
     }
 
     /// Snapshots written so far.
@@ -180,22 +190,19 @@ impl MpmWriter {
         for (group, t, n) in &self.written {
             let _ = write!(
                 s,
-                "   <Grid Name=\"{group}\" GridType=\"Collection\" CollectionType=\"Spatial\">\n    <Time Value=\"{t:e}\"/>\n    <Grid Name=\"points\" GridType=\"Uniform\">\n     <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{n}\"/>\n     <Geometry GeometryType=\"XYZ\">\n      <DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">mpm.h5:/{group}/position</DataItem>\n     </Geometry>\n"
+                "   <Grid Name=\"{group}\" GridType=\"Collection\" CollectionType=\"Spatial\">\n    <Time Value=\"{t:e}\"/>\n"
             );
-            for (name, comps, _) in POINT_DATASETS.iter().skip(1) {
-                let (kind, dims) = match comps {
-                    1 => ("Scalar", format!("{n}")),
-                    3 => ("Vector", format!("{n} 3")),
-                    c => ("Matrix", format!("{n} {c}")),
-                };
-                let _ = write!(
-                    s,
-                    "     <Attribute Name=\"{name}\" AttributeType=\"{kind}\" Center=\"Node\">\n      <DataItem Dimensions=\"{dims}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">mpm.h5:/{group}/{name}</DataItem>\n     </Attribute>\n"
-                );
-            }
+            super::xdmf::open_points_grid(
+                &mut s,
+                "    ",
+                "points",
+                ("mpm.h5", group, *n),
+                &POINT_DATASETS,
+            );
             let _ = write!(
                 s,
-                "     <Attribute Name=\"id\" AttributeType=\"Scalar\" Center=\"Node\">\n      <DataItem Dimensions=\"{n}\" NumberType=\"UInt\" Precision=\"8\" Format=\"HDF\">mpm.h5:/{group}/id</DataItem>\n     </Attribute>\n    </Grid>\n    <Grid Name=\"grid\" GridType=\"Uniform\">\n     <Topology TopologyType=\"2DCoRectMesh\" Dimensions=\"{nyn} {nxn}\"/>\n     <Geometry GeometryType=\"ORIGIN_DXDY\">\n      <DataItem Dimensions=\"2\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">0 0</DataItem>\n      <DataItem Dimensions=\"2\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">{h:e} {h:e}</DataItem>\n     </Geometry>\n     <Attribute Name=\"node_mass\" AttributeType=\"Scalar\" Center=\"Node\">\n      <DataItem Dimensions=\"{nyn} {nxn}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">mpm.h5:/{group}/grid/mass</DataItem>\n     </Attribute>\n     <Attribute Name=\"node_velocity\" AttributeType=\"Vector\" Center=\"Node\">\n      <DataItem Dimensions=\"{nyn} {nxn} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">mpm.h5:/{group}/grid/velocity</DataItem>\n     </Attribute>\n    </Grid>\n   </Grid>\n"
+                "    </Grid>\n    <Grid Name=\"grid\" GridType=\"Uniform\">\n     <Topology TopologyType=\"2DCoRectMesh\" Dimensions=\"{nyn} {nxn}\"/>\n     <Geometry GeometryType=\"ORIGIN_DXDY\">\n      <DataItem Dimensions=\"2\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">{o:e} {o:e}</DataItem>\n      <DataItem Dimensions=\"2\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">{h:e} {h:e}</DataItem>\n     </Geometry>\n     <Attribute Name=\"node_mass\" AttributeType=\"Scalar\" Center=\"Node\">\n      <DataItem Dimensions=\"{nyn} {nxn}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">mpm.h5:/{group}/grid/mass</DataItem>\n     </Attribute>\n     <Attribute Name=\"node_velocity\" AttributeType=\"Vector\" Center=\"Node\">\n      <DataItem Dimensions=\"{nyn} {nxn} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">mpm.h5:/{group}/grid/velocity</DataItem>\n     </Attribute>\n    </Grid>\n   </Grid>\n",
+                o = -h
             );
         }
         s.push_str("  </Grid>\n </Domain>\n</Xdmf>\n");

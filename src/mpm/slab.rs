@@ -168,21 +168,24 @@ impl MpmSystem {
             }
         };
         let mut out = [Vec::new(), Vec::new()];
-        let mut keep = vec![true; self.points.len()];
-        for i in 0..self.points.len() {
-            if let Some(side) = side_of(self.points.pos[i][0]) {
-                self.points.pack(i, &mut out[side]);
-                keep[i] = false;
-            }
-        }
-        let leaving = keep.iter().filter(|k| !**k).count();
+        // Usually nobody leaves: scan first, allocate only for leavers.
+        let leaving = (0..self.points.len())
+            .filter(|&i| side_of(self.points.pos[i][0]).is_some())
+            .count();
         if leaving > 0 {
+            let mut keep = vec![true; self.points.len()];
+            for i in 0..self.points.len() {
+                if let Some(side) = side_of(self.points.pos[i][0]) {
+                    self.points.pack(i, &mut out[side]);
+                    keep[i] = false;
+                }
+            }
             self.points.retain(&keep);
         }
         self.migrated += leaving as u64;
         let (got, wait) = swap_neighbours_varlen(comm, peers, TAG_MIGRATE, [&out[0], &out[1]]);
         self.comm_seconds += wait;
-        let mut arrived = 0;
+        let (kept, mut arrived) = (self.points.len(), 0);
         for msg in &got {
             for p in msg.chunks_exact(PACKED) {
                 self.points.push_packed(p);
@@ -192,7 +195,10 @@ impl MpmSystem {
         if leaving + arrived > 0 {
             self.invalidate_order();
         }
-        self.points.pos.iter().any(|p| side_of(p[0]).is_some())
+        // Those kept are home; only arrivals can still be out (from two slabs away).
+        self.points.pos[kept..]
+            .iter()
+            .any(|p| side_of(p[0]).is_some())
     }
 
     /// Hand the points that left this slab to their new owners (collective).

@@ -20,6 +20,8 @@ pub struct ValidMpmScene {
     pub setup: MpmSetup,
     /// The CFL limit h / c (s).
     pub critical_dt: f64,
+    /// The material points of every body, ids in body order (filled once, here).
+    pub points: Points,
     /// Non-fatal findings.
     pub warnings: Vec<String>,
     /// Path of the scene file.
@@ -50,16 +52,15 @@ pub fn parse_mpm(text: &str, path: &Path) -> Result<ValidMpmScene, SceneError> {
         base_dir: &base_dir,
     };
     let (setup, critical_dt, warnings) = validate(&scene, &ctx)?;
-    let valid = ValidMpmScene {
+    let points = build_points(&scene, &setup, &ctx)?;
+    Ok(ValidMpmScene {
         scene,
         setup,
         critical_dt,
+        points,
         warnings,
         path: path.to_owned(),
-    };
-    // Fill the bodies once here so that empty or overlapping bodies are scene errors.
-    build_points(&valid, &ctx)?;
-    Ok(valid)
+    })
 }
 
 /// Where a value sits in the scene: its key and the occurrence of that key.
@@ -443,8 +444,8 @@ pub fn body_shape(s: &ShapeSpec) -> Shape {
 
 /// The material points of every body, ids in body order, with their initial velocity and
 /// stress. Errors (naming the body) when a body holds no point or overlaps an earlier one.
-pub(crate) fn build_points(v: &ValidMpmScene, ctx: &Context) -> Result<Points, SceneError> {
-    let m = &v.scene.mpm;
+fn build_points(scene: &MpmScene, setup: &MpmSetup, ctx: &Context) -> Result<Points, SceneError> {
+    let m = &scene.mpm;
     let mut points = Points::default();
     let mut next_id = 0u64;
     let shapes: Vec<Shape> = m.bodies.iter().map(|b| body_shape(&b.shape)).collect();
@@ -454,12 +455,12 @@ pub(crate) fn build_points(v: &ValidMpmScene, ctx: &Context) -> Result<Points, S
             .iter()
             .position(|x| x.name() == body.material)
             .unwrap_or(0);
-        let density = v.setup.materials[mat].density;
+        let density = setup.materials[mat].density;
         let start = points.len();
         let k = fill(
             &mut points,
             &shapes[n],
-            &v.setup.spec,
+            &setup.spec,
             body.points_per_cell,
             density,
             mat as u16,
@@ -470,7 +471,7 @@ pub(crate) fn build_points(v: &ValidMpmScene, ctx: &Context) -> Result<Points, S
             ShapeSpec::Polygon { .. } => "vertices_m",
         };
         if k == 0 {
-            return Err(ctx.err(key, n, format!("body {n} holds no material point: it is thinner than a cell's sub-square (h / points_per_cell = {} m)", v.setup.spec.h / body.points_per_cell as f64)));
+            return Err(ctx.err(key, n, format!("body {n} holds no material point: it is thinner than a cell's sub-square (h / points_per_cell = {} m)", setup.spec.h / body.points_per_cell as f64)));
         }
         for i in start..points.len() {
             if let Some(o) = shapes[..n].iter().position(|s| s.contains(points.pos[i])) {
@@ -485,22 +486,4 @@ pub(crate) fn build_points(v: &ValidMpmScene, ctx: &Context) -> Result<Points, S
         }
     }
     Ok(points)
-}
-
-impl ValidMpmScene {
-    /// The scene's material points (see [`build_points`]).
-    pub fn points(&self) -> Result<Points, SceneError> {
-        let text = std::fs::read_to_string(&self.path).unwrap_or_default();
-        let base = self
-            .path
-            .parent()
-            .map(Path::to_path_buf)
-            .unwrap_or_default();
-        let ctx = Context {
-            text: &text,
-            path: &self.path,
-            base_dir: &base,
-        };
-        build_points(self, &ctx)
-    }
 }

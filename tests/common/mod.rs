@@ -107,3 +107,21 @@ pub fn on_ranks(ranks: usize, bin: &str) -> std::process::Command {
         .current_dir(root());
     cmd
 }
+
+/// `grainflow run SCENE --out OUT --quiet --threads 1 EXTRA…` on `ranks` ranks; panics
+/// (printing stderr) unless it succeeds.
+pub fn run_on_ranks(ranks: usize, bin: &str, scene: &Path, out: &Path, extra: &[&str]) {
+    let o = on_ranks(ranks, bin)
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args(["--quiet", "--threads", "1"])
+        .args(extra)
+        .output()
+        .expect("grainflow or mpirun starts");
+    eprintln!("{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{ranks} ranks failed: {:?}", o.status);
+}
