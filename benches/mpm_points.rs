@@ -30,6 +30,7 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
             cohesion_pa: 0.0,
             tension_cutoff_pa: 0.0,
             softening: None,
+            inertial_friction: None,
         }),
     };
     let setup = MpmSetup {

@@ -3,7 +3,8 @@
 and grainflow's own DEM sweep.
 
 Reads runs/mpm-collapse/<name>/summary.json (jobs/mpm-collapse/run.sh): the main sweep is
-a<a> (2 mm cells, GIMP, 2x2 points per cell); the study runs are a<a>-h4mm, -linear, -ppc4.
+a<a> (4 mm cells, GIMP, 2x2 points per cell); the study runs are a<a>-h2mm, -linear, -ppc4,
+-flip, -rough and -mui (mu(I) friction).
 Prints a table of (L_f - L_i)/L_i and H_f/L_i against the experiments' law (Lajeunesse et
 al. 2005) and the 2-D DEM law, the study's differences, and draws run-out vs a on log axes
 with the DEM sweep of issue 5 (its committed table, jobs/column-collapse/README.md).
@@ -43,7 +44,7 @@ def main():
     p.add_argument("--out", default=None, help="PNG to write")
     args = p.parse_args()
     runs = load(args.runs)
-    main_rows, rough_rows = [], []
+    main_rows, rough_rows, mui_rows = [], [], []
     print(f"{'scene':>10} {'a':>5} {'points':>7} {'runout':>7} {'exp.':>6} {'dev':>7} {'DEM law':>7} {'dev':>7} {'H_f/L_i':>7} {'t/tau_c':>7} {'Mpts/s':>6}")
     for name, s in sorted(runs.items(), key=lambda kv: (kv[1]["results"]["collapse.aspect_ratio"], kv[0])):
         r = s["results"]
@@ -55,12 +56,14 @@ def main():
             main_rows.append((a, ro))
         elif name.endswith("-rough") and "h2mm" not in name:
             rough_rows.append((a, ro))
+        elif name.endswith("-mui") and "h2mm" not in name:
+            mui_rows.append((a, ro))
     for a in (2, 4):
         base = runs.get(f"a{a}")
         if not base:
             continue
         b = base["results"]["collapse.runout"]
-        for var in ("h2mm", "linear", "h2mm-linear", "ppc4", "flip", "rough"):
+        for var in ("h2mm", "linear", "h2mm-linear", "ppc4", "flip", "rough", "mui"):
             v = runs.get(f"a{a}-{var}")
             if v:
                 print(f"a = {a}: {var:6s} run-out {v['results']['collapse.runout']:.3f} vs {b:.3f} ({100*(v['results']['collapse.runout']/b-1):+.1f} %)")
@@ -85,6 +88,9 @@ def main():
     if rough_rows:
         ax.loglog([a for a, _ in rough_rows], [r for _, r in rough_rows], "^", color="tab:orange",
                   label="grainflow MPM, rough (no-slip) base")
+    if mui_rows:
+        ax.loglog([a for a, _ in mui_rows], [r for _, r in mui_rows], "v", color="tab:green",
+                  label="grainflow MPM, Coulomb base, mu(I) friction")
     ax.set_xlabel("aspect ratio a = H_i / L_i")
     ax.set_ylabel("run-out (L_f - L_i) / L_i")
     ax.legend(fontsize=8)

@@ -215,6 +215,29 @@ fn bad_mpm_scenes_name_the_field() {
         &bad("friction = 0.46 }", "friction = -1 }"),
         &["left", "friction"],
     );
+    let mu_i = "inertial_friction = { limit_friction_deg = 32.76, reference_inertial_number = 0.279, grain_diameter_m = 1.15e-3, grain_density_kg_m3 = 2500.0 }";
+    let with = |text: &str| {
+        bad(
+            "friction_deg = 22.2",
+            &format!("friction_deg = 22.2\n{text}"),
+        )
+    };
+    refused(
+        &with(&mu_i.replace("= 32.76", "= 20.0")),
+        &["limit_friction_deg", "above the static friction_deg"],
+    );
+    refused(
+        &with(&mu_i.replace("= 2500.0", "= 1000.0")),
+        &["grain_density_kg_m3", "bulk density"],
+    );
+    refused(
+        &with(&format!("{mu_i}\nsoftening = {{ residual_friction_deg = 20.0, residual_cohesion_pa = 0.0, plastic_strain_start = 0.0, plastic_strain_end = 0.1 }}")),
+        &["inertial_friction", "softening"],
+    );
+    refused(
+        &with(&mu_i.replace("grain_diameter_m", "diameter_m")),
+        &["unknown field", "diameter_m"],
+    );
     let two = format!(
         "{good}\n[[mpm.bodies]]\nmaterial = \"beads\"\npoints_per_cell = 2\nshape = {{ kind = \"rectangle\", min_m = [0.03, 0.0], max_m = [0.09, 0.03] }}\n"
     );

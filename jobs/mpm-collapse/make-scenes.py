@@ -28,7 +28,7 @@ SEP = 1.15
 
 
 def scene(a, h=0.004, ppc=2, shape="gimp", update="usf", li=0.1, title_extra="", avg=True, pic=0.05,
-          base=None):
+          base=None, mu_i=False):
     hi = a * li
     # Run-out room: 2x the experiments' law plus margin; flows stop by ~6 tau_c.
     runout = (1.2 * a if a < 2.3 else 1.9 * a ** (2 / 3)) * li
@@ -72,7 +72,7 @@ friction_deg = {PHI}
 dilation_deg = 0.0
 cohesion_pa = 0.0
 separation_volume_ratio = {SEP}
-
+{MU_I if mu_i else ''}
 [[mpm.bodies]]
 material = "glass-beads"
 points_per_cell = {ppc}
@@ -90,6 +90,13 @@ kind = "column-collapse"
 wall_x_m = 0.0
 floor_y_m = 0.0
 ''' + (CHECK if a <= 2 else "")
+
+
+# mu(I) (Jop, Forterre & Pouliquen 2006): the static friction stays the repose angle's
+# 22.2 deg; phi_2 = 32.76 deg and I0 = 0.279 are Jop et al. (2005)'s glass beads; d = 1.15 mm
+# (Table 4.1); rho_s = 2500 kg/m^3 (glass).
+MU_I = '''inertial_friction = { limit_friction_deg = 32.76, reference_inertial_number = 0.279, grain_diameter_m = 1.15e-3, grain_density_kg_m3 = 2500.0 }
+'''
 
 
 # Issue 6: for a <= 2 the run-out must lie within 20 % of the experiments' law.
@@ -120,6 +127,10 @@ def main():
         files[f"a{a}-h2mm-linear.toml"] = scene(a, h=0.002, shape="linear", title_extra=" (2 mm cells, linear shapes)")
         files[f"a{a}-ppc4.toml"] = scene(a, ppc=4, title_extra=" (4x4 points per cell)")
         files[f"a{a}-flip.toml"] = scene(a, pic=0.0, title_extra=" (pure FLIP)")
+    for a in [0.5, 1, 2, 4, 8]:
+        files[f"a{a:g}-mui.toml"] = scene(a, mu_i=True, title_extra=" (mu(I) friction)")
+    for a in [0.5, 1, 2, 4]:
+        files[f"a{a:g}-h2mm-mui.toml"] = scene(a, h=0.002, mu_i=True, title_extra=" (2 mm cells, mu(I) friction)")
     for name, text in files.items():
         with open(os.path.join(out, name), "w") as f:
             f.write(text)

@@ -1,5 +1,6 @@
 //! Materials of material points: one enum, one stress update. The objective (Jaumann)
-//! rotation is applied here, before the constitutive update, for every model.
+//! rotation is applied here, before the constitutive update, for every model, and so is the
+//! rate-dependent friction angle of μ(I) (see [`super::inertial`]).
 
 use super::mohr_coulomb::{MohrCoulomb, Prepared};
 
@@ -102,6 +103,14 @@ impl Material {
         eps_p: &mut f64,
     ) -> ([f64; 3], bool) {
         let d = [l[0] * dt, l[3] * dt, 0.5 * (l[1] + l[2]) * dt];
+        // μ(I): the inertial number of the stress at the start of the step (explicit).
+        let inertial = match &self.model {
+            Model::MohrCoulomb(MohrCoulomb {
+                inertial_friction: Some(r),
+                ..
+            }) => Some(r.inertial_number(l, stress)),
+            _ => None,
+        };
         // Jaumann: σ̇ = σ̊ + Wσ − σW, W_xy = ½(∂vx/∂y − ∂vy/∂x) (e.g. Belytschko et al. 2000, eq. 5.4.11).
         let w = 0.5 * (l[1] - l[2]) * dt;
         let [sxx, syy, sxy, _] = *stress;
@@ -119,7 +128,24 @@ impl Material {
                 stress[3] += lam * tr;
                 false
             }
-            Model::MohrCoulomb(mc) => mc.update_prepared(k, stress, d, eps_p).yielded,
+            Model::MohrCoulomb(mc) => match (mc.inertial_friction, inertial) {
+                (Some(r), Some(i)) => {
+                    // tan φ(I) from the static tan φ (Jop, Forterre & Pouliquen 2006, eq. 4).
+                    let phi = r.friction(k.sin_phi / k.cos_phi, i).atan();
+                    let (sin_phi, cos_phi) = phi.sin_cos();
+                    let at_rate = MohrCoulomb {
+                        friction_deg: phi.to_degrees(),
+                        ..*mc
+                    };
+                    let k = Prepared {
+                        sin_phi,
+                        cos_phi,
+                        ..*k
+                    };
+                    at_rate.update_prepared(&k, stress, d, eps_p).yielded
+                }
+                _ => mc.update_prepared(k, stress, d, eps_p).yielded,
+            },
         };
         (d, yielded)
     }
@@ -173,5 +199,70 @@ mod tests {
         assert!((st[0] - 1200.0).abs() < 1e-9 && (st[1] - 400.0).abs() < 1e-9);
         assert!((st[3] - 400.0).abs() < 1e-9 && st[2] == 0.0);
         assert!((m.wave_speed() - (1.2e6f64 / 1000.0).sqrt()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn inertial_friction_mobilises_the_friction_of_the_shear_rate() {
+        // Simple shear u_x = γ̇ y of a cohesionless Mohr–Coulomb point with μ(I) (glass beads,
+        // Jop et al. 2005: φ₂ = 32.76°, I₀ = 0.279, d = 1.15 mm, ρ_s = 2500 kg/m³). Once it
+        // flows, every step ends on the yield surface of φ(I), with I from the pressure at the
+        // start of the step (hand formula below), and the mobilised angle grows with γ̇.
+        let (phi_s, d, rho_s, i0) = (22.2f64, 1.15e-3, 2500.0, 0.279);
+        let (mu_s, mu_2) = (phi_s.to_radians().tan(), 32.76f64.to_radians().tan());
+        let m = Material {
+            density: 1925.0,
+            separation_volume_ratio: f64::INFINITY,
+            model: Model::MohrCoulomb(MohrCoulomb {
+                youngs_modulus_pa: 1.98e6,
+                poisson_ratio: 0.3,
+                friction_deg: phi_s,
+                dilation_deg: 0.0,
+                cohesion_pa: 0.0,
+                tension_cutoff_pa: 0.0,
+                softening: None,
+                inertial_friction: Some(crate::mpm::InertialFriction {
+                    limit_friction: mu_2,
+                    reference_inertial_number: i0,
+                    grain_diameter_m: d,
+                    grain_density_kg_m3: rho_s,
+                }),
+            }),
+        };
+        let k = m.prepare();
+        let mut mobilised = Vec::new();
+        for rate in [0.0, 20.0, 200.0] {
+            let mut s = [-500.0, -500.0, 0.0, -500.0];
+            let (mut ep, mut last) = (0.0, phi_s);
+            // Rate 0: shear slowly (1e-6 s⁻¹ of shear per step of 1 s ~ quasi-static).
+            let (l, dt) = if rate == 0.0 {
+                ([0.0, 1e-4, 0.0, 0.0], 1.0)
+            } else {
+                ([0.0, rate, 0.0, 0.0], 1e-4 / rate)
+            };
+            let mut flowed = 0;
+            for _ in 0..400 {
+                let p = -(s[0] + s[1] + s[3]) / 3.0;
+                let gamma = l[1];
+                let i = gamma * d / (p / rho_s).sqrt();
+                // Jop, Forterre & Pouliquen (2006), eq. 4.
+                let phi = (mu_s + (mu_2 - mu_s) * i / (i0 + i)).atan().to_degrees();
+                let (_, yielded) = m.update(&k, &mut s, l, dt, &mut ep);
+                if yielded {
+                    let f = MohrCoulomb::yield_value(&s, phi, 0.0);
+                    assert!(
+                        f.abs() <= 1e-9 * 500.0,
+                        "rate {rate}: f = {f} at φ(I) = {phi}"
+                    );
+                    flowed += 1;
+                    last = phi;
+                }
+            }
+            assert!(flowed > 100, "rate {rate}: flowed {flowed} of 400 steps");
+            mobilised.push(last);
+        }
+        // Quasi-static: the static angle (I ~ 1e-7); faster: higher, below φ₂.
+        assert!((mobilised[0] - phi_s).abs() < 1e-3, "{mobilised:?}");
+        assert!(mobilised[1] > phi_s + 1.0 && mobilised[2] > mobilised[1] + 1.0);
+        assert!(mobilised[2] < 32.76, "{mobilised:?}");
     }
 }

@@ -6,12 +6,14 @@
 //! - [`order`], [`transfer`]: canonical point order and the particle-to-grid sums whose
 //!   order does not depend on threads or ranks.
 //! - [`sweeps`]: node update, stress update, grid-to-particle.
-//! - [`material`], [`mohr_coulomb`]: constitutive models.
+//! - [`material`], [`mohr_coulomb`], [`inertial`]: constitutive models (Mohr–Coulomb,
+//!   optionally with μ(I) rate-dependent friction).
 //! - [`system`]: the time step (USF, USL, MUSL) as timed stages.
 //! - [`generate`]: filling rectangles and polygons with n × n points per cell.
 
 pub mod generate;
 pub mod grid;
+pub mod inertial;
 pub mod material;
 pub mod mohr_coulomb;
 pub mod order;
@@ -24,6 +26,7 @@ pub mod transfer;
 
 pub use generate::{fill, Shape};
 pub use grid::{Boundaries, GridSpec, NodeFields, Side};
+pub use inertial::InertialFriction;
 pub use material::{Material, Model};
 pub use mohr_coulomb::MohrCoulomb;
 pub use points::Points;

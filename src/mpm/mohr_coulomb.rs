@@ -10,6 +10,8 @@
 //! * `EdgeCompression`: σ1 = σ2 > σ3 (one major compressive stress: triaxial compression);
 //! * `EdgeExtension`: σ1 > σ2 = σ3 (two equal major compressive stresses: triaxial extension).
 
+use super::inertial::InertialFriction;
+
 /// Linear softening of friction and cohesion with equivalent plastic strain.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Softening {
@@ -42,6 +44,9 @@ pub struct MohrCoulomb {
     pub tension_cutoff_pa: f64,
     /// Optional linear softening of φ and c with equivalent plastic strain.
     pub softening: Option<Softening>,
+    /// Optional rate dependence of φ: the μ(I) law, with `friction_deg` as the static
+    /// friction (applied by [`crate::mpm::Material::update`]; not combined with softening).
+    pub inertial_friction: Option<InertialFriction>,
 }
 
 /// Run constants of a [`MohrCoulomb`] material: Lamé parameters (Pa) and the sine and

@@ -12,6 +12,7 @@ fn mat(phi: f64, psi: f64, c: f64, st: f64) -> MohrCoulomb {
         cohesion_pa: c,
         tension_cutoff_pa: st,
         softening: None,
+        inertial_friction: None,
     }
 }
 

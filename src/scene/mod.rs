@@ -7,6 +7,7 @@ mod grains;
 mod grains_check;
 mod mpm;
 mod mpm_check;
+mod mpm_material_check;
 mod schema;
 mod units;
 mod validate;

@@ -128,6 +128,10 @@ pub enum MaterialSpec {
         /// Linear softening of φ and c with equivalent plastic strain.
         #[serde(default)]
         softening: Option<SofteningSpec>,
+        /// Rate-dependent friction (μ(I) law): `friction_deg` is then the static friction.
+        /// Not combined with `softening`.
+        #[serde(default)]
+        inertial_friction: Option<InertialFrictionSpec>,
         /// Volume ratio V/V₀ (> 1) above which a point has lost contact and carries no
         /// stress until compressed back below it: the loosest packing of a granular
         /// material relative to the initial one (Dunatunga & Kamrin 2015). Absent: never;
@@ -160,6 +164,23 @@ pub struct SofteningSpec {
     pub plastic_strain_start: f64,
     /// Equivalent plastic strain where the residual values are reached (> start).
     pub plastic_strain_end: f64,
+}
+
+/// The μ(I) law of a Mohr–Coulomb material (Jop, Forterre & Pouliquen 2006):
+/// tan φ(I) = tan φ_s + (tan φ₂ − tan φ_s) I / (I₀ + I), I = γ̇ d / √(p / ρ_s).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InertialFrictionSpec {
+    /// φ₂ (degrees): the friction angle approached at high inertial number, above
+    /// `friction_deg` (glass beads: 32.76°, Jop et al. 2005).
+    pub limit_friction_deg: f64,
+    /// I₀ (–): the inertial number at which half of the increase is reached (glass beads:
+    /// 0.279).
+    pub reference_inertial_number: f64,
+    /// Mean grain diameter d (m).
+    pub grain_diameter_m: f64,
+    /// Density of the grains' solid ρ_s (kg/m³), at least the bulk `density_kg_m3`.
+    pub grain_density_kg_m3: f64,
 }
 
 /// A body of material points.
