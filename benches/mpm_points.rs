@@ -46,7 +46,7 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
         gravity: [0.0, -9.81],
         dt: 0.5 * critical_dt(&[mat], h),
         damping: 0.0,
-        pic: 0.0,
+        velocity_update: VelocityUpdate::Flip { pic: 0.0 },
         volumetric_averaging: false,
         materials: vec![mat],
     };

@@ -132,13 +132,21 @@ fn mpm_on_1_2_and_4_ranks_match_bit_for_bit() {
 }
 
 #[test]
-fn mpm_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
+fn mpm_apic_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
     let tmp = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(root().join(SCENE)).unwrap();
-    let with_ckpt = text.replace(
-        "output_every_s = 0.04",
-        "output_every_s = 0.04\ncheckpoint_every = 1200",
-    );
+    // With APIC, so that the points' affine moments must survive migration and the
+    // checkpoint for the runs to agree.
+    let with_ckpt = text
+        .replace(
+            "output_every_s = 0.04",
+            "output_every_s = 0.04\ncheckpoint_every = 1200",
+        )
+        .replace(
+            "update = \"usf\"",
+            "update = \"usf\"\nvelocity_transfer = \"apic\"",
+        );
+    assert!(with_ckpt.contains("apic") && with_ckpt.contains("checkpoint_every"));
     let scene = tmp.path().join("ckpt.toml");
     std::fs::write(&scene, with_ckpt).unwrap();
     let (full, part, cont) = (

@@ -238,6 +238,20 @@ fn bad_mpm_scenes_name_the_field() {
         &with(&mu_i.replace("grain_diameter_m", "diameter_m")),
         &["unknown field", "diameter_m"],
     );
+    refused(
+        &bad(
+            "update = \"usf\"",
+            "update = \"usf\"\nvelocity_transfer = \"apic\"\npic_fraction = 0.05",
+        ),
+        &["pic_fraction", "apic"],
+    );
+    refused(
+        &bad(
+            "shape_functions = \"gimp\"",
+            "shape_functions = \"linear\"\nvelocity_transfer = \"apic\"",
+        ),
+        &["velocity_transfer", "GIMP"],
+    );
     let two = format!(
         "{good}\n[[mpm.bodies]]\nmaterial = \"beads\"\npoints_per_cell = 2\nshape = {{ kind = \"rectangle\", min_m = [0.03, 0.0], max_m = [0.09, 0.03] }}\n"
     );

@@ -33,7 +33,7 @@ fn setup(
         gravity: g,
         dt,
         damping: 0.0,
-        pic: 0.0,
+        velocity_update: VelocityUpdate::Flip { pic: 0.0 },
         volumetric_averaging: false,
         materials: vec![m],
     }

@@ -49,7 +49,7 @@ cell_size_m = {h}
 shape_functions = "{shape}"
 update = "{update}"
 volumetric_averaging = {"true" if avg else "false"}
-pic_fraction = {pic}
+{'velocity_transfer = "apic"' if pic is None else f"pic_fraction = {pic}"}
 gravity_m_s2 = [0.0, -9.81]
 
 [mpm.time_step]
@@ -131,6 +131,12 @@ def main():
         files[f"a{a:g}-mui.toml"] = scene(a, mu_i=True, title_extra=" (mu(I) friction)")
     for a in [0.5, 1, 2, 4]:
         files[f"a{a:g}-h2mm-mui.toml"] = scene(a, h=0.002, mu_i=True, title_extra=" (2 mm cells, mu(I) friction)")
+    for a in [0.5, 1, 2, 4, 8]:
+        files[f"a{a:g}-apic.toml"] = scene(a, pic=None, title_extra=" (APIC)")
+    for a in [0.5, 1, 2, 4, 8]:
+        files[f"a{a:g}-apic-mui.toml"] = scene(a, pic=None, mu_i=True, title_extra=" (APIC, mu(I) friction)")
+    for a in [0.5, 1, 2]:
+        files[f"a{a:g}-h2mm-apic.toml"] = scene(a, h=0.002, pic=None, title_extra=" (2 mm cells, APIC)")
     for name, text in files.items():
         with open(os.path.join(out, name), "w") as f:
             f.write(text)

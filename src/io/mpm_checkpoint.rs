@@ -13,8 +13,8 @@ use std::path::Path;
 
 /// `format` attribute of an MPM checkpoint.
 pub const FORMAT: &str = "grainflow-mpm-checkpoint";
-/// Version of the layout below.
-pub const FORMAT_VERSION: u32 = 1;
+/// Version of the layout below (2: points carry the APIC affine velocity, 25 words).
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Counters of an MPM run that a restart needs besides the points.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -32,4 +32,5 @@ pub use mohr_coulomb::MohrCoulomb;
 pub use points::Points;
 pub use shape::ShapeKind;
 pub use slab::Totals;
+pub use sweeps::VelocityUpdate;
 pub use system::{critical_dt, MpmError, MpmSetup, MpmSystem, Scheme, MPM_STAGES};

@@ -12,6 +12,10 @@ pub struct Points {
     pub pos: Vec<[f64; 2]>,
     /// Velocity (m/s).
     pub vel: Vec<[f64; 2]>,
+    /// APIC affine moment B = Σ_I S v_I (x_I − x_p)ᵀ = [Bxx, Bxy, Byx, Byy] (m²/s; Jiang et
+    /// al. 2015): the point's velocity field is v_p + B D⁻¹ (x − x_p), D = Σ_I S (x_I −
+    /// x_p)(x_I − x_p)ᵀ (see [`super::transfer::inertia_1d`]). Zero without APIC.
+    pub affine: Vec<[f64; 4]>,
     /// Mass per metre of depth (kg/m).
     pub mass: Vec<f64>,
     /// Initial volume per metre of depth (m²); the current volume is `vol0 · det F`.
@@ -31,7 +35,7 @@ pub struct Points {
 }
 
 /// Number of f64 words one point packs into (see [`Points::pack`]).
-pub const PACKED: usize = 21;
+pub const PACKED: usize = 25;
 
 impl Points {
     /// Number of points.
@@ -59,6 +63,7 @@ impl Points {
         self.id.push(id);
         self.pos.push(pos);
         self.vel.push([0.0; 2]);
+        self.affine.push([0.0; 4]);
         self.mass.push(density * vol);
         self.vol0.push(vol);
         self.half0.push(half);
@@ -81,6 +86,7 @@ impl Points {
         out.push(f64::from_bits(self.id[i]));
         out.extend_from_slice(&self.pos[i]);
         out.extend_from_slice(&self.vel[i]);
+        out.extend_from_slice(&self.affine[i]);
         out.extend_from_slice(&[self.mass[i], self.vol0[i], self.half0[i]]);
         out.extend_from_slice(&self.stress[i]);
         out.extend_from_slice(&self.strain[i]);
@@ -95,14 +101,15 @@ impl Points {
         self.id.push(p[0].to_bits());
         self.pos.push([p[1], p[2]]);
         self.vel.push([p[3], p[4]]);
-        self.mass.push(p[5]);
-        self.vol0.push(p[6]);
-        self.half0.push(p[7]);
-        self.stress.push([p[8], p[9], p[10], p[11]]);
-        self.strain.push([p[12], p[13], p[14]]);
-        self.defgrad.push([p[15], p[16], p[17], p[18]]);
-        self.eps_p.push(p[19]);
-        self.material.push(p[20].to_bits() as u16);
+        self.affine.push([p[5], p[6], p[7], p[8]]);
+        self.mass.push(p[9]);
+        self.vol0.push(p[10]);
+        self.half0.push(p[11]);
+        self.stress.push([p[12], p[13], p[14], p[15]]);
+        self.strain.push([p[16], p[17], p[18]]);
+        self.defgrad.push([p[19], p[20], p[21], p[22]]);
+        self.eps_p.push(p[23]);
+        self.material.push(p[24].to_bits() as u16);
     }
 
     /// Keep only the points with `keep[i]`, preserving their order.
@@ -114,6 +121,7 @@ impl Points {
         filter(&mut self.id, keep);
         filter(&mut self.pos, keep);
         filter(&mut self.vel, keep);
+        filter(&mut self.affine, keep);
         filter(&mut self.mass, keep);
         filter(&mut self.vol0, keep);
         filter(&mut self.half0, keep);
@@ -136,6 +144,7 @@ impl Points {
         apply(&mut self.id, order, &mut scratch.u64s);
         apply(&mut self.pos, order, &mut scratch.v2);
         apply(&mut self.vel, order, &mut scratch.v2);
+        apply(&mut self.affine, order, &mut scratch.v4);
         apply(&mut self.mass, order, &mut scratch.f64s);
         apply(&mut self.vol0, order, &mut scratch.f64s);
         apply(&mut self.half0, order, &mut scratch.f64s);
@@ -180,6 +189,7 @@ mod tests {
                 i as u16,
             );
             p.stress[i as usize] = [i as f64, -1.0, 0.5, 3.0];
+            p.affine[i as usize] = [0.5, i as f64, -2.0, 1.0];
         }
         let mut buf = Vec::new();
         p.pack(3, &mut buf);
@@ -188,6 +198,8 @@ mod tests {
         q.push_packed(&buf);
         assert_eq!(q.id[0], 13);
         assert_eq!(q.stress[0], p.stress[3]);
+        assert_eq!(q.affine[0], p.affine[3]);
+        assert_eq!(q.defgrad[0], p.defgrad[3]);
         assert_eq!(q.material[0], 3);
         let mut s = PermuteScratch::default();
         p.permute(&[4, 3, 2, 1, 0], &mut s);

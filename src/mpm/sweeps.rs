@@ -154,7 +154,8 @@ pub struct Interp<'a> {
 
 impl Interp<'_> {
     /// Visit the nodes in the support of a point at `pos` in `cell` with initial
-    /// half-length `half0` and deformation gradient `f`: `visit(node, S, [∂S/∂x, ∂S/∂y])`.
+    /// half-length `half0` and deformation gradient `f`: `visit(node, S, [∂S/∂x, ∂S/∂y],
+    /// x_I − x_p)`.
     #[inline(always)]
     fn each_node(
         &self,
@@ -162,7 +163,7 @@ impl Interp<'_> {
         cell: [u32; 2],
         half0: f64,
         f: &[f64; 4],
-        mut visit: impl FnMut(usize, f64, [f64; 2]),
+        mut visit: impl FnMut(usize, f64, [f64; 2], [f64; 2]),
     ) {
         let h = self.spec.h;
         let [c, r] = cell;
@@ -171,9 +172,12 @@ impl Interp<'_> {
         let wy = weights_1d(self.kind, pos[1], r as i64, h, half[1]);
         for kx in wx.first..wx.first + wx.count {
             let col = self.spec.node(c as i64 - 1 + kx as i64, r as i64 - 1);
+            let dx = (c as i64 - 1 + kx as i64) as f64 * h - pos[0];
             for ky in wy.first..wy.first + wy.count {
                 let w = wx.w[kx] * wy.w[ky];
-                visit(col + ky, w, [wx.g[kx] * wy.w[ky], wx.w[kx] * wy.g[ky]]);
+                let dy = (r as i64 - 1 + ky as i64) as f64 * h - pos[1];
+                let g = [wx.g[kx] * wy.w[ky], wx.w[kx] * wy.g[ky]];
+                visit(col + ky, w, g, [dx, dy]);
             }
         }
     }
@@ -193,7 +197,7 @@ pub fn velocity_gradients(points: &Points, it: &Interp, v: &[[f64; 2]], out: &mu
         .into_par_iter()
         .for_each(|(&x, &h0, f, &cell, l)| {
             *l = [0.0; 4];
-            it.each_node(x, cell, h0, f, |n, _, g| {
+            it.each_node(x, cell, h0, f, |n, _, g, _| {
                 let vn = v[n];
                 l[0] += vn[0] * g[0];
                 l[1] += vn[0] * g[1];
@@ -294,17 +298,36 @@ pub fn update_stress(
         )
 }
 
-/// Grid-to-particle sweep: FLIP velocity update blended with a fraction `pic` of the PIC
-/// velocity, and the position update x ← x + Δt Σ S v_new written to `pos_next`.
+/// How [`grid_to_points`] updates the point velocities.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum VelocityUpdate {
+    /// FLIP blended with a fraction `pic` in [0, 1] of the PIC velocity (0: pure FLIP).
+    Flip {
+        /// PIC fraction.
+        pic: f64,
+    },
+    /// APIC (Jiang et al. 2015): the PIC velocity plus the affine velocity C = B D⁻¹, which
+    /// the next particle-to-grid pass carries (the points store B): exact for affine
+    /// velocity fields, conserves angular momentum. GIMP shapes only: with linear tents D
+    /// vanishes on a node.
+    Apic,
+}
+
+/// Grid-to-particle sweep: the point velocity update of `update` and the position update
+/// x ← x + Δt Σ S v_new written to `pos_next`.
 pub fn grid_to_points(
     points: &mut Points,
     it: &Interp,
     nodes: &NodeFields,
     b: &Boundaries,
     dt: f64,
-    pic: f64,
+    update: VelocityUpdate,
     pos_next: &mut Vec<[f64; 2]>,
 ) {
+    let (pic, apic) = match update {
+        VelocityUpdate::Flip { pic } => (pic, false),
+        VelocityUpdate::Apic => (1.0, true),
+    };
     // Closed sides are rigid walls: a centre that would cross one stays on it, with its
     // velocity into the wall removed (the grid condition acts on nodes only, so a point
     // just inside can be interpolated across).
@@ -317,6 +340,7 @@ pub fn grid_to_points(
         half0,
         defgrad,
         vel,
+        affine,
         ..
     } = points;
     pos_next.resize(pos.len(), [0.0; 2]);
@@ -326,18 +350,31 @@ pub fn grid_to_points(
         defgrad.par_iter(),
         it.columns.cell.par_iter(),
         vel.par_iter_mut(),
+        affine.par_iter_mut(),
         pos_next.par_iter_mut(),
     )
         .into_par_iter()
-        .for_each(|(&x, &h0, f, &cell, v, xn)| {
-            let (mut dv, mut vp) = ([0.0; 2], [0.0; 2]);
-            it.each_node(x, cell, h0, f, |n, w, _| {
+        .for_each(|(&x, &h0, f, &cell, v, c, xn)| {
+            let (mut dv, mut vp, mut bm) = ([0.0; 2], [0.0; 2], [0.0; 4]);
+            it.each_node(x, cell, h0, f, |n, w, _, d| {
                 let (a, b) = (nodes.v_new[n], nodes.v_old[n]);
                 dv[0] += w * (a[0] - b[0]);
                 dv[1] += w * (a[1] - b[1]);
                 vp[0] += w * a[0];
                 vp[1] += w * a[1];
+                if apic {
+                    // B_p = Σ_I S v_I (x_I − x_p)ᵀ (Jiang et al. 2015, eq. 10).
+                    bm[0] += w * a[0] * d[0];
+                    bm[1] += w * a[0] * d[1];
+                    bm[2] += w * a[1] * d[0];
+                    bm[3] += w * a[1] * d[1];
+                }
             });
+            if apic {
+                // Stored as B_p; the next particle-to-grid pass divides by D_p at the point's
+                // new position, so that C_p D_p = B_p there and angular momentum is exact.
+                *c = bm;
+            }
             for d in 0..2 {
                 // FLIP: v_p += Σ S_I (v_I^new − v_I^old); PIC: v_p = Σ S_I v_I^new.
                 v[d] = (1.0 - pic) * (v[d] + dv[d]) + pic * vp[d];

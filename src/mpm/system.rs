@@ -10,7 +10,7 @@ use super::shape::ShapeKind;
 use super::slab::{balanced_columns, column_counts, REBALANCE_EVERY};
 use super::sweeps::{
     average_volumetric, grid_to_points, update_nodes, update_stress, velocities,
-    velocity_gradients, Interp, NodeUpdate,
+    velocity_gradients, Interp, NodeUpdate, VelocityUpdate,
 };
 use super::transfer::{particles_to_strips, strips_to_nodes, Columns, P2g, Strip};
 use decomposition::Comm;
@@ -50,8 +50,8 @@ pub struct MpmSetup {
     pub dt: f64,
     /// Cundall local damping α (0 = off).
     pub damping: f64,
-    /// Fraction of PIC in the velocity update (0 = pure FLIP).
-    pub pic: f64,
+    /// Point velocity update: FLIP blended with PIC, or APIC.
+    pub velocity_update: VelocityUpdate,
     /// Replace each point's volumetric strain rate by its cell's mean (see
     /// [`super::sweeps::average_volumetric`]).
     pub volumetric_averaging: bool,
@@ -231,6 +231,7 @@ impl MpmSystem {
             what,
             &mut self.strips[own.clone()],
             own.start,
+            s.velocity_update == VelocityUpdate::Apic,
         );
         self.exchange_strips(comm);
         let cols = self.node_cols();
@@ -390,14 +391,13 @@ impl MpmSystem {
             kind: self.setup.shape,
             columns: &self.columns,
         };
-        let (dt, pic) = (self.setup.dt, self.setup.pic);
         grid_to_points(
             &mut self.points,
             &it,
             &self.nodes,
             &self.setup.boundaries,
-            dt,
-            pic,
+            self.setup.dt,
+            self.setup.velocity_update,
             &mut self.pos_next,
         );
     }

@@ -10,7 +10,7 @@
 
 use super::grid::{GridSpec, NodeFields};
 use super::points::Points;
-use super::shape::{half_lengths, weights_1d, ShapeKind};
+use super::shape::{half_lengths, weights_1d, ShapeKind, Weights1d};
 use rayon::prelude::*;
 
 /// Quantities one node slot accumulates: mass, momentum x/y, internal force x/y.
@@ -60,6 +60,7 @@ pub fn particles_to_strips(
     what: P2g,
     strips: &mut [Strip],
     first_col: usize,
+    affine: bool,
 ) {
     let (pad_lo, pad_hi) = if kind == ShapeKind::Linear {
         (0, 1)
@@ -84,25 +85,23 @@ pub fn particles_to_strips(
                 (columns.cell[last as usize][1] as i64 + pad_hi - strip.row_lo + 1) as usize;
             strip.data.clear();
             strip.data.resize(strip.rows * 4, [0.0; Q]);
-            match what {
-                P2g::MassMomentum => {
-                    accumulate::<true, false>(points, columns, spec, kind, list, strip)
-                }
-                P2g::Force => accumulate::<false, true>(points, columns, spec, kind, list, strip),
-                P2g::All => accumulate::<true, true>(points, columns, spec, kind, list, strip),
+            let args = (points, columns, spec, kind, list);
+            match (what, affine) {
+                (P2g::MassMomentum, false) => accumulate::<true, false, false>(args, strip),
+                (P2g::MassMomentum, true) => accumulate::<true, false, true>(args, strip),
+                (P2g::Force, _) => accumulate::<false, true, false>(args, strip),
+                (P2g::All, false) => accumulate::<true, true, false>(args, strip),
+                (P2g::All, true) => accumulate::<true, true, true>(args, strip),
             }
         });
 }
 
 /// Add the contributions of the points `list` (one cell column, canonical order) to
-/// `strip`: mass and momentum when `MASS`, internal force when `FORCE`.
+/// `strip`: mass and momentum when `MASS`, internal force when `FORCE`; with `AFFINE` the
+/// momentum carries the points' affine velocity (APIC).
 #[inline(always)]
-fn accumulate<const MASS: bool, const FORCE: bool>(
-    points: &Points,
-    columns: &Columns,
-    spec: &GridSpec,
-    kind: ShapeKind,
-    list: &[u32],
+fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
+    (points, columns, spec, kind, list): (&Points, &Columns, &GridSpec, ShapeKind, &[u32]),
     strip: &mut Strip,
 ) {
     let h = spec.h;
@@ -115,6 +114,15 @@ fn accumulate<const MASS: bool, const FORCE: bool>(
         let wy = weights_1d(kind, y, pr as i64, h, half[1]);
         let m = points.mass[p];
         let [vx, vy] = points.vel[p];
+        let c = if AFFINE {
+            // C_p = B_p D_p⁻¹ at the current position (Jiang et al. 2015, eq. 12).
+            let d = inertia_1d(&wx, pc, h, x);
+            let e = inertia_1d(&wy, pr, h, y);
+            let b = points.affine[p];
+            [b[0] / d, b[1] / e, b[2] / d, b[3] / e]
+        } else {
+            [0.0; 4]
+        };
         let (vol, s) = if FORCE {
             (points.volume(p), points.stress[p])
         } else {
@@ -128,8 +136,16 @@ fn accumulate<const MASS: bool, const FORCE: bool>(
                 if MASS {
                     let wm = wx.w[kx] * wy.w[ky] * m;
                     slot[0] += wm;
-                    slot[1] += wm * vx;
-                    slot[2] += wm * vy;
+                    if AFFINE {
+                        // APIC: m_I v_I = Σ_p S_Ip m_p (v_p + C_p (x_I − x_p)) (Jiang et al. 2015, eq. 13).
+                        let dx = (pc as i64 - 1 + kx as i64) as f64 * h - x;
+                        let dy = (pr as i64 - 1 + ky as i64) as f64 * h - y;
+                        slot[1] += wm * (vx + c[0] * dx + c[1] * dy);
+                        slot[2] += wm * (vy + c[2] * dx + c[3] * dy);
+                    } else {
+                        slot[1] += wm * vx;
+                        slot[2] += wm * vy;
+                    }
                 }
                 if FORCE {
                     let gx = wx.g[kx] * wy.w[ky];
@@ -141,6 +157,19 @@ fn accumulate<const MASS: bool, const FORCE: bool>(
             }
         }
     }
+}
+
+/// One diagonal entry of the APIC inertia-like matrix, D = Σ_I S_I (x_I − x_p)² (m²), of
+/// the 1-D weights `w` of a point at `x` (m) in cell `cell` on a grid of spacing `h` (m).
+/// Tensor-product weights with linear completeness make D diagonal (Σ S (x_I − x_p) = 0).
+#[inline(always)]
+pub fn inertia_1d(w: &Weights1d, cell: u32, h: f64, x: f64) -> f64 {
+    let mut d = 0.0;
+    for k in w.first..w.first + w.count {
+        let dx = (cell as i64 - 1 + k as i64) as f64 * h - x;
+        d += w.w[k] * dx * dx;
+    }
+    d
 }
 
 /// Sum the strips into the node fields for the node columns `node_cols` (global node

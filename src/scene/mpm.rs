@@ -43,7 +43,12 @@ pub struct MpmSpec {
     /// Cundall local damping α in [0, 1); 0 (off) by default.
     #[serde(default)]
     pub local_damping: f64,
-    /// Fraction of PIC in the point velocity update, in [0, 1]; 0 = FLIP.
+    /// How point velocities are updated from the grid: `flip` (default; blended with
+    /// `pic_fraction` of PIC) or `apic` (affine PIC, Jiang et al. 2015: no knob, no
+    /// dissipation of affine motion; needs `pic_fraction` = 0).
+    #[serde(default)]
+    pub velocity_transfer: VelocityTransfer,
+    /// Fraction of PIC in the FLIP velocity update, in [0, 1]; 0 = pure FLIP.
     #[serde(default)]
     pub pic_fraction: f64,
     /// Replace each point's volumetric strain rate by the volume-weighted mean of its
@@ -181,6 +186,17 @@ pub struct InertialFrictionSpec {
     pub grain_diameter_m: f64,
     /// Density of the grains' solid ρ_s (kg/m³), at least the bulk `density_kg_m3`.
     pub grain_density_kg_m3: f64,
+}
+
+/// Point velocity update of an MPM scene.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum VelocityTransfer {
+    /// FLIP, blended with `pic_fraction` of PIC.
+    #[default]
+    Flip,
+    /// Affine particle-in-cell.
+    Apic,
 }
 
 /// A body of material points.

@@ -5,7 +5,9 @@ use super::mpm::*;
 use super::mpm_material_check::{in_range, material};
 use super::validate::{positive, validate_checks, Context};
 use super::SceneError;
-use crate::mpm::{critical_dt, fill, GridSpec, MpmSetup, Points, Shape, Side};
+use crate::mpm::{
+    critical_dt, fill, GridSpec, MpmSetup, Points, Shape, ShapeKind, Side, VelocityUpdate,
+};
 use std::path::{Path, PathBuf};
 
 /// An MPM scene that passed validation, with its derived solver setup.
@@ -101,6 +103,21 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
         (0.0, 1.0, false),
         "",
     )?;
+    if m.velocity_transfer == VelocityTransfer::Apic && m.shape_functions == ShapeKind::Linear {
+        return Err(ctx.err(
+            "velocity_transfer",
+            0,
+            "\"apic\" needs GIMP shape functions (\"gimp\" or \"cp-gimp\"): with linear ones \
+             the APIC matrix D vanishes when a point sits on a node",
+        ));
+    }
+    if m.velocity_transfer == VelocityTransfer::Apic && m.pic_fraction != 0.0 {
+        return Err(ctx.err(
+            "pic_fraction",
+            0,
+            "is a FLIP setting: remove it with velocity_transfer = \"apic\"",
+        ));
+    }
     if !m.gravity_m_s2.iter().all(|g| g.is_finite()) {
         return Err(ctx.err("gravity_m_s2", 0, "must be finite"));
     }
@@ -264,7 +281,12 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
         gravity: m.gravity_m_s2,
         dt,
         damping: m.local_damping,
-        pic: m.pic_fraction,
+        velocity_update: match m.velocity_transfer {
+            VelocityTransfer::Flip => VelocityUpdate::Flip {
+                pic: m.pic_fraction,
+            },
+            VelocityTransfer::Apic => VelocityUpdate::Apic,
+        },
         volumetric_averaging: m.volumetric_averaging,
         materials,
     };
