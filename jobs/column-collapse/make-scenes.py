@@ -8,8 +8,8 @@ import argparse
 import math
 import os
 
-WIDTH_MM = {0.5: 80, 1: 36, 2: 32, 4: 30, 8: 30}
-NAMES = {0.5: "a0.5", 1: "a1", 2: "a2", 4: "a4", 8: "a8"}
+WIDTH_MM = {0.5: 80, 1: 36, 2: 32, 4: 30, 8: 30, 16: 30}
+NAMES = {0.5: "a0.5", 1: "a1", 2: "a2", 4: "a4", 8: "a8", 16: "a16"}
 
 
 def scene(a, L, mu_r, seed=1):

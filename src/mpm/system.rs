@@ -226,12 +226,10 @@ impl MpmSystem {
         particles_to_strips(
             &self.points,
             &self.columns,
-            &s.spec,
-            s.shape,
-            what,
+            (&s.spec, s.shape),
+            (what, s.velocity_update == VelocityUpdate::Apic),
             &mut self.strips[own.clone()],
             own.start,
-            s.velocity_update == VelocityUpdate::Apic,
         );
         self.exchange_strips(comm);
         let cols = self.node_cols();

@@ -51,16 +51,15 @@ pub struct Columns {
 }
 
 /// Accumulate the strips of every cell column for `what`, from the points in canonical
-/// order (see [`Columns`]); empty columns get an empty strip.
+/// order (see [`Columns`]); empty columns get an empty strip. With `affine` (APIC) the
+/// momentum carries the points' affine velocity.
 pub fn particles_to_strips(
     points: &Points,
     columns: &Columns,
-    spec: &GridSpec,
-    kind: ShapeKind,
-    what: P2g,
+    (spec, kind): (&GridSpec, ShapeKind),
+    (what, affine): (P2g, bool),
     strips: &mut [Strip],
     first_col: usize,
-    affine: bool,
 ) {
     let (pad_lo, pad_hi) = if kind == ShapeKind::Linear {
         (0, 1)
