@@ -86,11 +86,12 @@ fn one_step_error(shape: ShapeKind, update: VelocityUpdate) -> (f64, f64) {
     let b = [0.3, -0.1];
     let mut pts = disk(&spec, [1.0, 1.0], 0.55);
     let start: Vec<[f64; 2]> = pts.pos.clone();
-    let mut want_b = vec![[0.0; 4]; pts.len()];
+    let want_b: Vec<[f64; 4]> = (0..pts.len())
+        .map(|i| moment(&pts, i, shape, spec.h, a))
+        .collect();
     for i in 0..pts.len() {
         let [x, y] = pts.pos[i];
         pts.vel[i] = [a[0] * x + a[1] * y + b[0], a[2] * x + a[3] * y + b[1]];
-        want_b[i] = moment(&pts, i, shape, spec.h, a);
         if update == VelocityUpdate::Apic {
             pts.affine[i] = want_b[i];
         }
@@ -107,8 +108,8 @@ fn one_step_error(shape: ShapeKind, update: VelocityUpdate) -> (f64, f64) {
         if update == VelocityUpdate::Apic {
             // B is taken at the start position (before the move): A D_p there.
             let want = want_b[p.id[i] as usize];
-            for k in 0..4 {
-                ec = ec.max((p.affine[i][k] - want[k]).abs());
+            for (got, want) in p.affine[i].iter().zip(want) {
+                ec = ec.max((got - want).abs());
             }
         }
     }
