@@ -89,11 +89,11 @@ fn one_step_error(shape: ShapeKind, update: VelocityUpdate) -> (f64, f64) {
     let want_b: Vec<[f64; 4]> = (0..pts.len())
         .map(|i| moment(&pts, i, shape, spec.h, a))
         .collect();
-    for i in 0..pts.len() {
+    for (i, moment) in want_b.iter().enumerate() {
         let [x, y] = pts.pos[i];
         pts.vel[i] = [a[0] * x + a[1] * y + b[0], a[2] * x + a[3] * y + b[1]];
         if update == VelocityUpdate::Apic {
-            pts.affine[i] = want_b[i];
+            pts.affine[i] = *moment;
         }
     }
     let mut sys =
