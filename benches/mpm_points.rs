@@ -5,14 +5,23 @@
 //! (φ = 30°, E = 1 MPa), USF, GIMP and linear shape functions, on 1 and 2 threads; then
 //! 10⁶ points (500 × 500 cells) on 1 and 2 threads. The column collapses during the timed
 //! steps, so the points move, re-sort and yield as in a production run.
+//! Last, the cost of the APIC transfer against FLIP on the CB-Geo problem.
 //! `cargo bench --bench mpm_points` (GRAINFLOW_BENCH_STEPS, default 300; GRAINFLOW_BENCH_ONLY
-//! = `cbgeo` or `million` for one part).
+//! = `cbgeo`, `million` or `apic` for one part).
 use decomposition::SingleProcess;
 use grainflow::mpm::mohr_coulomb::MohrCoulomb;
 use grainflow::mpm::*;
 use std::time::Instant;
 
-fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> MpmSystem {
+const FLIP: VelocityUpdate = VelocityUpdate::Flip { pic: 0.0 };
+
+fn column(
+    cells_x: usize,
+    cells_y: usize,
+    shape: ShapeKind,
+    scheme: Scheme,
+    update: VelocityUpdate,
+) -> MpmSystem {
     let h = 0.01;
     let spec = GridSpec {
         nx: cells_x * 4,
@@ -46,7 +55,7 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
         gravity: [0.0, -9.81],
         dt: 0.5 * critical_dt(&[mat], h),
         damping: 0.0,
-        velocity_update: VelocityUpdate::Flip { pic: 0.0 },
+        velocity_update: update,
         volumetric_averaging: false,
         materials: vec![mat],
     };
@@ -72,13 +81,20 @@ fn column(cells_x: usize, cells_y: usize, shape: ShapeKind, scheme: Scheme) -> M
     MpmSystem::new(setup, pts, &SingleProcess).unwrap()
 }
 
-fn run(cx: usize, cy: usize, shape: ShapeKind, scheme: Scheme, threads: usize, steps: usize) {
+fn run(
+    cx: usize,
+    cy: usize,
+    (shape, scheme): (ShapeKind, Scheme),
+    update: VelocityUpdate,
+    threads: usize,
+    steps: usize,
+) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .unwrap();
     pool.install(|| {
-        let mut s = column(cx, cy, shape, scheme);
+        let mut s = column(cx, cy, shape, scheme, update);
         let n = s.points.len();
         for _ in 0..20 {
             s.step(&SingleProcess).unwrap();
@@ -95,7 +111,7 @@ fn run(cx: usize, cy: usize, shape: ShapeKind, scheme: Scheme, threads: usize, s
             .map(|(k, v)| format!("{k} {:.0} %", 100.0 * v / secs))
             .collect();
         println!(
-            "{n:>8} points {shape:?} {scheme:?} {threads} thread(s): {:.3e} particle-steps/s ({:.0} ns per point-step); {}; yielded {}",
+            "{n:>8} points {shape:?} {scheme:?} {update:?} {threads} thread(s): {:.3e} particle-steps/s ({:.0} ns per point-step); {}; yielded {}",
             (n * steps) as f64 / secs,
             secs / (n * steps) as f64 * 1e9 * threads as f64,
             split.join(", "),
@@ -114,17 +130,39 @@ fn main() {
         println!("CB-Geo problem: a = 2 column, 150 × 300 cells of 1 cm, 2 × 2 points per cell (bar: 3.1e5 / 4.8e5 GIMP, 4.9e5 linear on 1 thread)");
         for shape in [ShapeKind::Gimp, ShapeKind::Linear] {
             for threads in [1, 2] {
-                run(150, 300, shape, Scheme::Usf, threads, steps);
+                run(150, 300, (shape, Scheme::Usf), FLIP, threads, steps);
             }
         }
         for scheme in [Scheme::Usl, Scheme::Musl] {
-            run(150, 300, ShapeKind::Gimp, scheme, 1, steps);
+            run(150, 300, (ShapeKind::Gimp, scheme), FLIP, 1, steps);
         }
     }
     if only.is_empty() || only == "million" {
         println!("10⁶ points: 500 × 500 cells of 1 cm, 2 × 2 points per cell, GIMP, USF");
         for threads in [1, 2] {
-            run(500, 500, ShapeKind::Gimp, Scheme::Usf, threads, steps / 3);
+            run(
+                500,
+                500,
+                (ShapeKind::Gimp, Scheme::Usf),
+                FLIP,
+                threads,
+                steps / 3,
+            );
+        }
+    }
+    if only.is_empty() || only == "apic" {
+        println!("APIC against FLIP: the CB-Geo problem, GIMP, USF");
+        for threads in [1, 2] {
+            for update in [FLIP, VelocityUpdate::Apic] {
+                run(
+                    150,
+                    300,
+                    (ShapeKind::Gimp, Scheme::Usf),
+                    update,
+                    threads,
+                    steps,
+                );
+            }
         }
     }
 }

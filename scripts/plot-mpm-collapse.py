@@ -4,7 +4,7 @@ and grainflow's own DEM sweep.
 
 Reads runs/mpm-collapse/<name>/summary.json (jobs/mpm-collapse/run.sh): the main sweep is
 a<a> (4 mm cells, GIMP, 2x2 points per cell); the study runs are a<a>-h2mm, -linear, -ppc4,
--flip, -rough and -mui (mu(I) friction).
+-flip, -rough, -mui (mu(I) friction), -apic (APIC transfer) and -apic-mui.
 Prints a table of (L_f - L_i)/L_i and H_f/L_i against the experiments' law (Lajeunesse et
 al. 2005) and the 2-D DEM law, the study's differences, and draws run-out vs a on log axes
 with the DEM sweep of issue 5 (its committed table, jobs/column-collapse/README.md).
@@ -44,7 +44,7 @@ def main():
     p.add_argument("--out", default=None, help="PNG to write")
     args = p.parse_args()
     runs = load(args.runs)
-    main_rows, rough_rows, mui_rows = [], [], []
+    main_rows, rough_rows, mui_rows, apic_rows, apic_mui_rows = [], [], [], [], []
     print(f"{'scene':>10} {'a':>5} {'points':>7} {'runout':>7} {'exp.':>6} {'dev':>7} {'DEM law':>7} {'dev':>7} {'H_f/L_i':>7} {'t/tau_c':>7} {'Mpts/s':>6}")
     for name, s in sorted(runs.items(), key=lambda kv: (kv[1]["results"]["collapse.aspect_ratio"], kv[0])):
         r = s["results"]
@@ -56,6 +56,10 @@ def main():
             main_rows.append((a, ro))
         elif name.endswith("-rough") and "h2mm" not in name:
             rough_rows.append((a, ro))
+        elif name.endswith("-apic-mui"):
+            apic_mui_rows.append((a, ro))
+        elif name.endswith("-apic") and "h2mm" not in name:
+            apic_rows.append((a, ro))
         elif name.endswith("-mui") and "h2mm" not in name:
             mui_rows.append((a, ro))
     for a in (2, 4):
@@ -63,7 +67,8 @@ def main():
         if not base:
             continue
         b = base["results"]["collapse.runout"]
-        for var in ("h2mm", "linear", "h2mm-linear", "ppc4", "flip", "rough", "mui"):
+        for var in ("h2mm", "linear", "h2mm-linear", "ppc4", "flip", "rough", "mui", "apic",
+                    "h2mm-apic", "apic-mui"):
             v = runs.get(f"a{a}-{var}")
             if v:
                 print(f"a = {a}: {var:6s} run-out {v['results']['collapse.runout']:.3f} vs {b:.3f} ({100*(v['results']['collapse.runout']/b-1):+.1f} %)")
@@ -91,6 +96,12 @@ def main():
     if mui_rows:
         ax.loglog([a for a, _ in mui_rows], [r for _, r in mui_rows], "v", color="tab:green",
                   label="grainflow MPM, Coulomb base, mu(I) friction")
+    if apic_rows:
+        ax.loglog([a for a, _ in apic_rows], [r for _, r in apic_rows], "D", color="tab:purple",
+                  label="grainflow MPM, Coulomb base, APIC (no PIC damping)")
+    if apic_mui_rows:
+        ax.loglog([a for a, _ in apic_mui_rows], [r for _, r in apic_mui_rows], "d",
+                  color="tab:brown", mfc="none", label="grainflow MPM, APIC + mu(I)")
     ax.set_xlabel("aspect ratio a = H_i / L_i")
     ax.set_ylabel("run-out (L_f - L_i) / L_i")
     ax.legend(fontsize=8)
