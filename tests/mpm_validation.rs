@@ -311,7 +311,7 @@ fn layer_velocity(update: VelocityUpdate, times: &[f64]) -> Vec<f64> {
     s.velocity_update = update;
     s.volumetric_averaging = true;
     let mut sys = MpmSystem::new(s, pts, &SingleProcess).expect("system");
-    let mut mean_at = |t: f64, sys: &mut MpmSystem| {
+    let mean_at = |t: f64, sys: &mut MpmSystem| {
         while sys.time < t - 1e-12 {
             sys.step(&SingleProcess).expect("step");
         }
