@@ -259,11 +259,14 @@ fn bad_mpm_scenes_name_the_field() {
     refused(&format!("{good}\n[fluid]\n"), &["[mpm]", "[fluid]"]);
 }
 
-/// The shortest column at 2 mm cells (a = 0.5, 5000 points, 50 cells across): run-out within
-/// 20 % of the experiments' law 1.2 a (Lajeunesse et al. 2005; the scene's own check says
-/// the same), and the top of the column does not move (H_f/L_i = a).
+/// The shortest column at 2 mm cells (a = 0.5, 5000 points, 50 cells across), FLIP + 5 % PIC:
+/// the whole collapse pipeline (scene, run, deposit analysis, checks) end to end. Run-out
+/// within 20 % of the experiments' law 1.2 a (Lajeunesse et al. 2005; the scene's own check
+/// says the same) and the top of the column does not move (H_f/L_i = a). A regression check
+/// of this configuration, not a validation of the material: part of the agreement is the PIC
+/// blend's numerical damping (APIC runs out 0.94–1.23 here; jobs/mpm-collapse/README.md).
 #[test]
-fn short_column_collapse_matches_the_experiments() {
+fn short_column_collapse_with_the_pic_blend_stays_near_the_experiments() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("a0.5");
     let (o, s) = run(&root().join("jobs/mpm-collapse/a0.5-h2mm.toml"), &out);

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The MPM column-collapse sweep (a = 0.5, 1, 2, 4, 8 at 2 mm cells) and the resolution /
-# shape-function / points-per-cell study at a = 2 and 4, then the table and the plot with
-# the DEM sweep and the published laws.
+# The MPM column-collapse sweep (a = 0.5, 1, 2, 4, 8 at 4 mm cells, FLIP + 5 % PIC) and the
+# studies: rough base, 2 mm cells, shape functions, points per cell, pure FLIP, APIC, mu(I)
+# friction; then the table and the plot with the DEM sweep and the published laws.
 # Usage: [THREADS=n] jobs/mpm-collapse/run.sh [ranks] [scene names...]   (all scenes: about
-# an hour on 2 cores; e.g. `run.sh 1 a0.5 a1 a2` for the short columns)
+# two hours on 2 cores; e.g. `run.sh 1 a0.5 a1 a2` for the short columns)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 ranks=${1:-1}
@@ -16,7 +16,10 @@ names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
   names=(a0.5 a1 a2 a4 a8 a0.5-rough a1-rough a2-rough a4-rough a8-rough
          a0.5-h2mm a1-h2mm a2-h2mm a0.5-h2mm-rough a1-h2mm-rough a2-h2mm-rough a2-linear a2-h2mm-linear a2-ppc4 a2-flip
-         a4-h2mm a4-linear a4-h2mm-linear a4-ppc4 a4-flip)
+         a4-h2mm a4-linear a4-h2mm-linear a4-ppc4 a4-flip
+         a0.5-apic a1-apic a2-apic a4-apic a8-apic a0.5-h2mm-apic a1-h2mm-apic a2-h2mm-apic
+         a0.5-mui a1-mui a2-mui a4-mui a8-mui a0.5-h2mm-mui a1-h2mm-mui a2-h2mm-mui a4-h2mm-mui
+         a0.5-apic-mui a1-apic-mui a2-apic-mui a4-apic-mui a8-apic-mui)
 fi
 for name in "${names[@]}"; do
   scene=jobs/mpm-collapse/$name.toml
