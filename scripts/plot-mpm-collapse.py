@@ -82,14 +82,14 @@ def main():
         print("matplotlib not installed: table only")
         return
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    xs = [0.4 * 1.05 ** i for i in range(60)]
+    xs = [0.4 * 1.05 ** i for i in range(82)]
     ax.loglog(xs, [law(a, EXP) for a in xs], "k-", label="experiments (Lajeunesse et al. 2005)")
     ax.loglog(xs, [law(a, DEM) for a in xs], "k--", label="published 2-D DEM law")
     dem = DEM_SWEEP
     ax.errorbar([d[0] for d in dem], [d[1] for d in dem], yerr=[d[2] for d in dem], fmt="s",
                 color="tab:blue", label="grainflow DEM (disks)")
     ax.loglog([a for a, _ in main_rows], [r for _, r in main_rows], "o", color="tab:red",
-              label="grainflow MPM, Coulomb base (tan 24.8 deg)")
+              label="grainflow MPM, Coulomb base (tan 24.8 deg), FLIP + 5% PIC")
     if rough_rows:
         ax.loglog([a for a, _ in rough_rows], [r for _, r in rough_rows], "^", color="tab:orange",
                   label="grainflow MPM, rough (no-slip) base")
