@@ -4,7 +4,8 @@
 Reads runs/column-collapse/a<a>[-s<seed>]/summary.json (written by jobs/column-collapse/run.sh),
 averages the packings (seeds) of each aspect ratio, prints a table of (L_f - L_i)/L_i and H_f/L_i
 against the 2-D DEM law and the experiments (../shared/reference/README.md), fits the exponents
-of both regimes (split at the DEM law's transition a = 2.7), and draws run-out vs a on log axes
+of both regimes (split at the DEM law's transition a = 2.7), locates the transition where the
+local exponent falls below 1 (as the published laws define it), and draws run-out vs a on log axes
 with the reference lines (matplotlib; the table is printed without it).
 """
 import argparse
@@ -28,6 +29,44 @@ def fit(points):
     ys = [math.log(r) for _, r in points]
     mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
     return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+
+
+def local_exponent_transition(rows):
+    """Where the local exponent d ln(run-out) / d ln(a) falls below 1: the transition as the
+    published laws define it (exponent 1 below their stated transition, 2/3 above). Returns
+    (linear interpolation between the exponents of neighbouring a, the same from a quadratic
+    fit of ln(run-out) in ln(a)), or None."""
+    xs = [math.log(a) for a, *_ in rows]
+    ys = [math.log(r) for _, r, *_ in rows]
+    if len(xs) < 3:
+        return None
+    loc = [(ys[i + 1] - ys[i]) / (xs[i + 1] - xs[i]) for i in range(len(xs) - 1)]
+    mid = [(xs[i + 1] + xs[i]) / 2 for i in range(len(xs) - 1)]
+    pair = None
+    for i in range(len(loc) - 1):
+        if loc[i] >= 1 > loc[i + 1]:
+            pair = math.exp(mid[i] + (loc[i] - 1) / (loc[i] - loc[i + 1]) * (mid[i + 1] - mid[i]))
+            break
+    # Quadratic least squares y = c0 + c1 x + c2 x^2 (normal equations), slope 1 at x*.
+    n = len(xs)
+    sx = [sum(x ** k for x in xs) for k in range(5)]
+    sxy = [sum(y * x ** k for x, y in zip(xs, ys)) for k in range(3)]
+    m = [[sx[i + j] for j in range(3)] for i in range(3)]
+    m[0][0] = n
+    det = lambda q: (q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1])
+                     - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0])
+                     + q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]))
+    d = det(m)
+    c = []
+    for k in range(3):
+        q = [row[:] for row in m]
+        for i in range(3):
+            q[i][k] = sxy[i]
+        c.append(det(q) / d)
+    quad = math.exp((1 - c[1]) / (2 * c[2])) if c[2] < 0 else None
+    if pair is None or quad is None:
+        return None
+    return pair, quad
 
 
 def main():
@@ -65,7 +104,13 @@ def main():
         cl = sum(math.log(r) - sl * math.log(a) for a, r in low) / len(low)
         ch = sum(math.log(r) - sh * math.log(a) for a, r in high) / len(high)
         if abs(sl - sh) > 1e-9:
-            print(f"transition (fits intersect): a = {math.exp((ch - cl) / (sl - sh)):.2f} (published 1.8-3)")
+            print(f"fitted branches intersect at a = {math.exp((ch - cl) / (sl - sh)):.2f} "
+                  f"(the published laws' own branches: {(EXP[1] / EXP[0]) ** 3:.2f} experiments, "
+                  f"{(DEM[1] / DEM[0]) ** 3:.2f} 2-D DEM)")
+    t = local_exponent_transition(rows)
+    if t:
+        print(f"transition (local exponent falls below 1): a = {t[0]:.2f} between neighbours, "
+              f"{t[1]:.2f} from a quadratic fit (published 1.8-3; the laws' own: {EXP[2]}, {DEM[2]})")
     if args.out:
         try:
             import matplotlib
