@@ -98,6 +98,9 @@ def main():
         print(f"exponent below the transition (a < {DEM[2]}): {fit(low):.3f} (published ~1)")
     if len(high) >= 2:
         print(f"exponent above the transition (a > {DEM[2]}): {fit(high):.3f} (published ~2/3)")
+    away = [(a, r) for a, r, *_ in rows if a >= 1.45 * DEM[2]]
+    if len(away) >= 2 and len(away) < len(high):
+        print(f"exponent above, away from the crossover (a >= {1.45 * DEM[2]:.1f}): {fit(away):.3f}")
     if len(low) >= 2 and len(high) >= 2:
         # Intersection of the two fitted power laws.
         sl, sh = fit(low), fit(high)

@@ -18,8 +18,8 @@ import os
 EXP = (1.2, 1.9, 2.3)   # Lajeunesse et al. 2005: 1.2 a below a ~ 2.3, 1.9 a^(2/3) above
 DEM = (1.67, 2.7, 2.7)  # published 2-D DEM of disks: 1.67 a below a ~ 2.7, 2.7 a^(2/3) above
 # grainflow's DEM sweep (jobs/column-collapse/README.md): a, mean run-out, std over packings.
-DEM_SWEEP = [(0.5, 0.742, 0.018), (1.0, 1.540, 0.137), (2.0, 3.284, 0.079),
-             (4.0, 6.606, 0.170), (7.88, 11.71, 0.49), (15.66, 19.67, 0.50)]
+DEM_SWEEP = [(0.5, 0.742, 0.018), (1.0, 1.540, 0.137), (2.0, 3.284, 0.079), (2.99, 4.754, 0.304),
+             (4.0, 6.606, 0.170), (5.92, 9.409, 0.186), (7.88, 11.71, 0.49), (15.66, 19.67, 0.50)]
 
 
 def law(a, c):
