@@ -84,6 +84,7 @@ impl Material {
                     g,
                     sin_phi: 0.0,
                     cos_phi: 1.0,
+                    sin_psi: 0.0,
                 }
             }
         }

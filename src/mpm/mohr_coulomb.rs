@@ -61,6 +61,8 @@ pub struct Prepared {
     pub sin_phi: f64,
     /// cos φ_peak.
     pub cos_phi: f64,
+    /// sin ψ (the dilation angle does not soften).
+    pub sin_psi: f64,
 }
 
 /// What one update did.
@@ -349,11 +351,12 @@ impl MohrCoulomb {
             g,
             sin_phi,
             cos_phi,
+            sin_psi: self.dilation_deg.to_radians().sin(),
         }
     }
 
     /// [`MohrCoulomb::update`] with the constants of [`MohrCoulomb::prepare`] (same result
-    /// bits; saves the divisions and the sine of the elastic fast path).
+    /// bits; saves the divisions and the sines of every update without softening).
     pub fn update_prepared(
         &self,
         k: &Prepared,
@@ -394,10 +397,16 @@ impl MohrCoulomb {
             };
         }
 
-        let spsi = self.dilation_deg.to_radians().sin();
+        let spsi = k.sin_psi;
         let eval = |x: f64| -> (f64, [f64; 3], Region) {
-            let (phi, c) = self.strength_at(eps_n + x);
-            let (sphi, cphi) = phi.to_radians().sin_cos();
+            // Without softening the strength is the prepared peak (no sine per return).
+            let (sphi, cphi, c) = if self.softening.is_none() {
+                (k.sin_phi, k.cos_phi, self.cohesion_pa)
+            } else {
+                let (phi, c) = self.strength_at(eps_n + x);
+                let (sphi, cphi) = phi.to_radians().sin_cos();
+                (sphi, cphi, c)
+            };
             // Apex c cot φ; with φ = 0 there is none (kept at the trial mean, never reached).
             let apex = if sphi > 1e-12 {
                 c * cphi / sphi
