@@ -88,20 +88,17 @@ def main():
     dem = DEM_SWEEP
     ax.errorbar([d[0] for d in dem], [d[1] for d in dem], yerr=[d[2] for d in dem], fmt="s",
                 color="tab:blue", label="grainflow DEM (disks)")
-    ax.loglog([a for a, _ in main_rows], [r for _, r in main_rows], "o", color="tab:red",
-              label="grainflow MPM, Coulomb base (tan 24.8 deg), FLIP + 5% PIC")
-    if rough_rows:
-        ax.loglog([a for a, _ in rough_rows], [r for _, r in rough_rows], "^", color="tab:orange",
-                  label="grainflow MPM, rough (no-slip) base")
-    if mui_rows:
-        ax.loglog([a for a, _ in mui_rows], [r for _, r in mui_rows], "v", color="tab:green",
-                  label="grainflow MPM, Coulomb base, mu(I) friction")
-    if apic_rows:
-        ax.loglog([a for a, _ in apic_rows], [r for _, r in apic_rows], "D", color="tab:purple",
-                  label="grainflow MPM, Coulomb base, APIC (no PIC damping)")
-    if apic_mui_rows:
-        ax.loglog([a for a, _ in apic_mui_rows], [r for _, r in apic_mui_rows], "d",
-                  color="tab:brown", mfc="none", label="grainflow MPM, APIC + mu(I)")
+    series = [
+        (main_rows, "o", "tab:red", "Coulomb base (tan 24.8 deg), FLIP + 5% PIC"),
+        (rough_rows, "^", "tab:orange", "rough (no-slip) base"),
+        (mui_rows, "v", "tab:green", "Coulomb base, mu(I) friction"),
+        (apic_rows, "D", "tab:purple", "Coulomb base, APIC (no PIC damping)"),
+        (apic_mui_rows, "d", "tab:brown", "APIC + mu(I)"),
+    ]
+    for rows, marker, color, label in series:
+        if rows:
+            ax.loglog([a for a, _ in rows], [r for _, r in rows], marker, color=color,
+                      mfc="none" if marker == "d" else color, label="grainflow MPM, " + label)
     ax.set_xlabel("aspect ratio a = H_i / L_i")
     ax.set_ylabel("run-out (L_f - L_i) / L_i")
     ax.legend(fontsize=8)

@@ -307,7 +307,6 @@ fn layer_velocity(update: VelocityUpdate, times: &[f64]) -> Vec<f64> {
         [g * theta.sin(), -g * theta.cos()],
         m,
     );
-    s.dt = 0.5 * critical_dt(&[m], spec.h);
     s.velocity_update = update;
     s.volumetric_averaging = true;
     let mut sys = MpmSystem::new(s, pts, &SingleProcess).expect("system");

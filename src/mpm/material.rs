@@ -132,18 +132,14 @@ impl Material {
             Model::MohrCoulomb(mc) => match (mc.inertial_friction, inertial) {
                 (Some(r), Some(i)) => {
                     // tan φ(I) from the static tan φ (Jop, Forterre & Pouliquen 2006, eq. 4).
-                    let phi = r.friction(k.sin_phi / k.cos_phi, i).atan();
-                    let (sin_phi, cos_phi) = phi.sin_cos();
-                    let at_rate = MohrCoulomb {
-                        friction_deg: phi.to_degrees(),
-                        ..*mc
-                    };
+                    // Without softening the return takes φ from `k` only.
+                    let (sin_phi, cos_phi) = r.friction(k.sin_phi / k.cos_phi, i).atan().sin_cos();
                     let k = Prepared {
                         sin_phi,
                         cos_phi,
                         ..*k
                     };
-                    at_rate.update_prepared(&k, stress, d, eps_p).yielded
+                    mc.update_prepared(&k, stress, d, eps_p).yielded
                 }
                 _ => mc.update_prepared(k, stress, d, eps_p).yielded,
             },
@@ -234,7 +230,7 @@ mod tests {
         for rate in [0.0, 20.0, 200.0] {
             let mut s = [-500.0, -500.0, 0.0, -500.0];
             let (mut ep, mut last) = (0.0, phi_s);
-            // Rate 0: shear slowly (1e-6 s⁻¹ of shear per step of 1 s ~ quasi-static).
+            // Rate 0: quasi-static, γ̇ = 1e-4 1/s in steps of 1 s (I ≈ 2.6e-7).
             let (l, dt) = if rate == 0.0 {
                 ([0.0, 1e-4, 0.0, 0.0], 1.0)
             } else {

@@ -356,7 +356,9 @@ impl MohrCoulomb {
     }
 
     /// [`MohrCoulomb::update`] with the constants of [`MohrCoulomb::prepare`] (same result
-    /// bits; saves the divisions and the sines of every update without softening).
+    /// bits; saves the divisions and the sines of every update without softening). Without
+    /// softening the friction is `k`'s sin φ, cos φ alone (`friction_deg` is not read), so a
+    /// caller may pass another φ there (μ(I) does).
     pub fn update_prepared(
         &self,
         k: &Prepared,

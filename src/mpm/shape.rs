@@ -31,6 +31,13 @@ pub struct Weights1d {
     pub g: [f64; 4],
 }
 
+/// x_I − x (m) for slot `slot` of the [`Weights1d`] of a point at `x` (m) in cell `cell`:
+/// slot k is node `cell − 1 + k`, at (cell − 1 + k) h.
+#[inline(always)]
+pub fn node_offset(cell: i64, slot: usize, h: f64, x: f64) -> f64 {
+    (cell - 1 + slot as i64) as f64 * h - x
+}
+
 /// Weights of a point at coordinate `x` (m) along one axis, for a grid of spacing `h` (m)
 /// whose node `I` sits at `I h`. `cell` is `floor(x / h)`; `half` is the point's domain
 /// half-length (m), ignored for [`ShapeKind::Linear`]. Precondition: `0 < half ≤ h/2`.

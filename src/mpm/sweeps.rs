@@ -5,7 +5,7 @@ use super::grid::{apply_side, Boundaries, GridSpec, NodeFields, Side};
 use super::material::Material;
 use super::mohr_coulomb::Prepared;
 use super::points::Points;
-use super::shape::{half_lengths, weights_1d, ShapeKind};
+use super::shape::{half_lengths, node_offset, weights_1d, ShapeKind};
 use super::transfer::Columns;
 use rayon::prelude::*;
 
@@ -172,10 +172,10 @@ impl Interp<'_> {
         let wy = weights_1d(self.kind, pos[1], r as i64, h, half[1]);
         for kx in wx.first..wx.first + wx.count {
             let col = self.spec.node(c as i64 - 1 + kx as i64, r as i64 - 1);
-            let dx = (c as i64 - 1 + kx as i64) as f64 * h - pos[0];
+            let dx = node_offset(c as i64, kx, h, pos[0]);
             for ky in wy.first..wy.first + wy.count {
                 let w = wx.w[kx] * wy.w[ky];
-                let dy = (r as i64 - 1 + ky as i64) as f64 * h - pos[1];
+                let dy = node_offset(r as i64, ky, h, pos[1]);
                 let g = [wx.g[kx] * wy.w[ky], wx.w[kx] * wy.g[ky]];
                 visit(col + ky, w, g, [dx, dy]);
             }

@@ -10,7 +10,7 @@
 
 use super::grid::{GridSpec, NodeFields};
 use super::points::Points;
-use super::shape::{half_lengths, weights_1d, ShapeKind, Weights1d};
+use super::shape::{half_lengths, node_offset, weights_1d, ShapeKind, Weights1d};
 use rayon::prelude::*;
 
 /// Quantities one node slot accumulates: mass, momentum x/y, internal force x/y.
@@ -137,8 +137,8 @@ fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
                     slot[0] += wm;
                     if AFFINE {
                         // APIC: m_I v_I = Σ_p S_Ip m_p (v_p + C_p (x_I − x_p)) (Jiang et al. 2015, eq. 13).
-                        let dx = (pc as i64 - 1 + kx as i64) as f64 * h - x;
-                        let dy = (pr as i64 - 1 + ky as i64) as f64 * h - y;
+                        let dx = node_offset(pc as i64, kx, h, x);
+                        let dy = node_offset(pr as i64, ky, h, y);
                         slot[1] += wm * (vx + c[0] * dx + c[1] * dy);
                         slot[2] += wm * (vy + c[2] * dx + c[3] * dy);
                     } else {
@@ -165,7 +165,7 @@ fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
 pub fn inertia_1d(w: &Weights1d, cell: u32, h: f64, x: f64) -> f64 {
     let mut d = 0.0;
     for k in w.first..w.first + w.count {
-        let dx = (cell as i64 - 1 + k as i64) as f64 * h - x;
+        let dx = node_offset(cell as i64, k, h, x);
         d += w.w[k] * dx * dx;
     }
     d
