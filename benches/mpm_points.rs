@@ -61,6 +61,7 @@ fn column(
         velocity_update: update,
         volumetric_averaging: false,
         materials: vec![mat],
+        side_walls: None,
     };
     let mut pts = Points::default();
     let (w, ht) = (cells_x as f64 * h, cells_y as f64 * h);

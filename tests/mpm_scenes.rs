@@ -252,6 +252,22 @@ fn bad_mpm_scenes_name_the_field() {
         ),
         &["velocity_transfer", "GIMP"],
     );
+    for (walls, words) in [
+        ("{ gap_m = 0.0, friction = 0.46 }", ["side_walls", "gap_m"]),
+        (
+            "{ gap_m = 0.1, friction = -0.1 }",
+            ["side_walls", "friction"],
+        ),
+        ("{ gap_m = 0.1 }", ["missing field", "friction"]),
+    ] {
+        refused(
+            &bad(
+                "update = \"usf\"",
+                &format!("update = \"usf\"\nside_walls = {walls}"),
+            ),
+            &words,
+        );
+    }
     let two = format!(
         "{good}\n[[mpm.bodies]]\nmaterial = \"beads\"\npoints_per_cell = 2\nshape = {{ kind = \"rectangle\", min_m = [0.03, 0.0], max_m = [0.09, 0.03] }}\n"
     );

@@ -32,6 +32,7 @@ fn setup(shape: ShapeKind, update: VelocityUpdate, spec: GridSpec, e: f64) -> Mp
         velocity_update: update,
         volumetric_averaging: false,
         materials: vec![m],
+        side_walls: None,
     }
 }
 

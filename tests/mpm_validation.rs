@@ -37,6 +37,7 @@ fn setup(
         velocity_update: VelocityUpdate::Flip { pic: 0.0 },
         volumetric_averaging: false,
         materials: vec![m],
+        side_walls: None,
     }
 }
 

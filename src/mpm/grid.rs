@@ -100,6 +100,44 @@ pub fn apply_side(side: Side, axis: usize, into: f64, v: &mut [f64; 2]) {
     }
 }
 
+/// The two side walls of a quasi-two-dimensional channel: parallel to the simulated
+/// plane, `gap_m` apart. In plane strain they are what holds ε_zz = 0, so each presses on
+/// the material with the out-of-plane stress |σ_zz| and resists its in-plane motion with
+/// Coulomb friction μ_w |σ_zz| (Janssen 1895; the side-wall term of Jop, Forterre &
+/// Pouliquen 2005). Per metre of depth this is a force of up to 2 μ_w |σ_zz| / W per
+/// unit area, opposite to the velocity; it never reverses it.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SideWalls {
+    /// Distance W between the walls (m), > 0.
+    pub gap_m: f64,
+    /// Coulomb friction coefficient μ_w = tan(wall friction angle), ≥ 0.
+    pub friction: f64,
+}
+
+impl SideWalls {
+    /// The factor 2 μ_w / W (1/m) that turns ∫ |σ_zz| dA into the walls' largest
+    /// friction force per metre of depth.
+    pub fn coefficient(&self) -> f64 {
+        2.0 * self.friction / self.gap_m
+    }
+}
+
+/// Coulomb friction of the side walls on a node velocity `v` (m/s): its magnitude drops by
+/// `dv` = Δt F_w / m (m/s), F_w the node's largest wall force, and stops at zero. The
+/// direction is kept.
+#[inline(always)]
+pub fn apply_side_walls(dv: f64, v: &mut [f64; 2]) {
+    let speed = (v[0] * v[0] + v[1] * v[1]).sqrt();
+    if speed <= dv {
+        *v = [0.0; 2];
+    } else if dv > 0.0 {
+        let keep = (speed - dv) / speed;
+        v[0] *= keep;
+        v[1] *= keep;
+    }
+}
+
 /// Node fields of the grid, column-major with padding (see [`GridSpec::node`]). Only the
 /// rows in `active[I]` of node column I hold values of the current step.
 #[derive(Debug, Clone, Default)]
@@ -110,6 +148,9 @@ pub struct NodeFields {
     pub mom: Vec<[f64; 2]>,
     /// Internal plus external force (N/m).
     pub force: Vec<[f64; 2]>,
+    /// Largest side-wall friction force, 2 μ_w / W Σ_p S_Ip V_p |σ_zz,p| (N/m); zero
+    /// without [`SideWalls`].
+    pub wall: Vec<f64>,
     /// Velocity p/m as mapped from the points, before the update and without boundary
     /// conditions (m/s).
     pub v_old: Vec<[f64; 2]>,
@@ -128,6 +169,7 @@ impl NodeFields {
             mass: vec![0.0; n],
             mom: vec![[0.0; 2]; n],
             force: vec![[0.0; 2]; n],
+            wall: vec![0.0; n],
             v_old: vec![[0.0; 2]; n],
             v_new: vec![[0.0; 2]; n],
             active: vec![(0, 0); spec.cols()],
@@ -176,6 +218,27 @@ mod tests {
         let mut v = [1.0, 4.0];
         apply_side(Side::Roller, 0, -1.0, &mut v);
         assert_eq!(v, [0.0, 4.0]);
+    }
+
+    #[test]
+    fn side_walls_brake_without_reversing() {
+        let walls = SideWalls {
+            gap_m: 0.1,
+            friction: 0.5,
+        };
+        assert_eq!(walls.coefficient(), 10.0);
+        // |v| = 5 drops by 1 along its own direction.
+        let mut v = [3.0, -4.0];
+        apply_side_walls(1.0, &mut v);
+        assert!((v[0] - 2.4).abs() < 1e-15 && (v[1] + 3.2).abs() < 1e-15);
+        // A larger impulse than the momentum stops the node, never reverses it.
+        let mut v = [3.0, -4.0];
+        apply_side_walls(5.5, &mut v);
+        assert_eq!(v, [0.0, 0.0]);
+        // No wall force, no change.
+        let mut v = [3.0, -4.0];
+        apply_side_walls(0.0, &mut v);
+        assert_eq!(v, [3.0, -4.0]);
     }
 
     #[test]

@@ -25,7 +25,7 @@ pub mod system;
 pub mod transfer;
 
 pub use generate::{fill, Shape};
-pub use grid::{Boundaries, GridSpec, NodeFields, Side};
+pub use grid::{Boundaries, GridSpec, NodeFields, Side, SideWalls};
 pub use inertial::InertialFriction;
 pub use material::{Material, Model};
 pub use mohr_coulomb::MohrCoulomb;

@@ -1,7 +1,7 @@
 //! The node update and the two point sweeps (stress update, grid-to-particle). Each sweep
 //! is one parallel pass over its data; every point or node is written by one task only.
 
-use super::grid::{apply_side, Boundaries, GridSpec, NodeFields, Side};
+use super::grid::{apply_side, apply_side_walls, Boundaries, GridSpec, NodeFields, Side};
 use super::material::Material;
 use super::mohr_coulomb::Prepared;
 use super::points::Points;
@@ -88,9 +88,10 @@ pub fn velocities(
 }
 
 /// The momentum update on the nodes: `v_new = v_old + dt (f_int + m g + f_damp) / m`, then
-/// the boundary conditions, which see the whole normal velocity into a wall (the incoming
-/// momentum and this step's forces), so Coulomb friction acts on the whole normal impulse.
-/// Requires `v_old` (from [`velocities`]) and the forces.
+/// the side walls' friction (at most `dt` times the node's wall force, never reversing
+/// `v_new`), then the boundary conditions, which see the whole normal velocity into a wall
+/// (the incoming momentum and this step's forces), so Coulomb friction acts on the whole
+/// normal impulse. Requires `v_old` (from [`velocities`]) and the forces.
 pub fn update_nodes(
     nodes: &mut NodeFields,
     spec: &GridSpec,
@@ -104,6 +105,7 @@ pub fn update_nodes(
     let NodeFields {
         mass,
         force,
+        wall,
         v_old,
         v_new,
         active,
@@ -112,13 +114,14 @@ pub fn update_nodes(
     (
         mass[range.clone()].par_chunks(rows),
         force[range.clone()].par_chunks(rows),
+        wall[range.clone()].par_chunks(rows),
         v_old[range.clone()].par_chunks(rows),
         v_new[range].par_chunks_mut(rows),
     )
         .into_par_iter()
         .with_max_len(2)
         .enumerate()
-        .for_each(|(n, (m, f, vo, vn))| {
+        .for_each(|(n, (m, f, w, vo, vn))| {
             let i = node_cols.start + n as i64;
             let (r0, r1) = active[first + n];
             for r in r0 as usize..r1 as usize {
@@ -135,6 +138,7 @@ pub fn update_nodes(
                     }
                     v[d] += u.dt * f_d / m[r];
                 }
+                apply_side_walls(u.dt * w[r] / m[r], &mut v);
                 constrain(b, spec, i, r as i64 - 1, &mut v);
                 vn[r] = v;
             }

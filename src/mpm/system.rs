@@ -1,7 +1,7 @@
 //! One MPM body system and its time step, written as the ordered, timed stages of the
 //! chosen update scheme (USF, USL or MUSL).
 
-use super::grid::{Boundaries, GridSpec, NodeFields};
+use super::grid::{Boundaries, GridSpec, NodeFields, SideWalls};
 use super::material::Material;
 use super::mohr_coulomb::Prepared;
 use super::order::{sort_points, OrderScratch, REORDER_EVERY};
@@ -57,6 +57,9 @@ pub struct MpmSetup {
     pub volumetric_averaging: bool,
     /// Materials, indexed by the points' `material`.
     pub materials: Vec<Material>,
+    /// Friction of the side walls of a quasi-two-dimensional channel; `None` for a plane
+    /// strain body without walls.
+    pub side_walls: Option<SideWalls>,
 }
 
 /// The CFL limit h / c (s), c the largest wave speed of a stress-carrying point (see
@@ -226,7 +229,11 @@ impl MpmSystem {
         particles_to_strips(
             &self.points,
             &self.columns,
-            (&s.spec, s.shape),
+            (
+                &s.spec,
+                s.shape,
+                s.side_walls.map_or(0.0, |w| w.coefficient()),
+            ),
             (what, s.velocity_update == VelocityUpdate::Apic),
             &mut self.strips[own.clone()],
             own.start,

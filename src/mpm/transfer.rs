@@ -13,17 +13,19 @@ use super::points::Points;
 use super::shape::{half_lengths, node_offset, weights_1d, ShapeKind, Weights1d};
 use rayon::prelude::*;
 
-/// Quantities one node slot accumulates: mass, momentum x/y, internal force x/y.
-pub const Q: usize = 5;
+/// Quantities one node slot accumulates: mass, momentum x/y, internal force x/y, and the
+/// largest side-wall friction force (see [`super::grid::SideWalls`]).
+pub const Q: usize = 6;
 
 /// What a particle-to-grid pass accumulates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum P2g {
     /// Mass and momentum.
     MassMomentum,
-    /// Internal force −V σ·∇S only (mass and momentum slots left zero).
+    /// Internal force −V σ·∇S and the side-wall force only (mass and momentum slots left
+    /// zero).
     Force,
-    /// All five quantities.
+    /// All six quantities.
     All,
 }
 
@@ -52,11 +54,12 @@ pub struct Columns {
 
 /// Accumulate the strips of every cell column for `what`, from the points in canonical
 /// order (see [`Columns`]); empty columns get an empty strip. With `affine` (APIC) the
-/// momentum carries the points' affine velocity.
+/// momentum carries the points' affine velocity. `walls` is 2 μ_w / W (1/m) of the side
+/// walls, 0 without them.
 pub fn particles_to_strips(
     points: &Points,
     columns: &Columns,
-    (spec, kind): (&GridSpec, ShapeKind),
+    (spec, kind, walls): (&GridSpec, ShapeKind, f64),
     (what, affine): (P2g, bool),
     strips: &mut [Strip],
     first_col: usize,
@@ -84,7 +87,7 @@ pub fn particles_to_strips(
                 (columns.cell[last as usize][1] as i64 + pad_hi - strip.row_lo + 1) as usize;
             strip.data.clear();
             strip.data.resize(strip.rows * 4, [0.0; Q]);
-            let args = (points, columns, spec, kind, list);
+            let args = (points, columns, spec, kind, list, walls);
             match (what, affine) {
                 (P2g::MassMomentum, false) => accumulate::<true, false, false>(args, strip),
                 (P2g::MassMomentum, true) => accumulate::<true, false, true>(args, strip),
@@ -100,7 +103,14 @@ pub fn particles_to_strips(
 /// momentum carries the points' affine velocity (APIC).
 #[inline(always)]
 fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
-    (points, columns, spec, kind, list): (&Points, &Columns, &GridSpec, ShapeKind, &[u32]),
+    (points, columns, spec, kind, list, walls): (
+        &Points,
+        &Columns,
+        &GridSpec,
+        ShapeKind,
+        &[u32],
+        f64,
+    ),
     strip: &mut Strip,
 ) {
     let h = spec.h;
@@ -127,6 +137,8 @@ fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
         } else {
             (0.0, [0.0; 4])
         };
+        // The side walls' largest friction force, 2 μ_w/W V_p |σ_zz| (Janssen 1895).
+        let wall = walls * vol * s[3].abs();
         let base = (pr as i64 - 1 - strip.row_lo) as usize;
         for ky in wy.first..wy.first + wy.count {
             let row = (base + ky) * 4;
@@ -152,6 +164,7 @@ fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
                     // f_int = −Σ_p V_p σ_p · ∇S_Ip (Sulsky et al. 1994, eq. 23).
                     slot[3] -= vol * (s[0] * gx + s[2] * gy);
                     slot[4] -= vol * (s[2] * gx + s[1] * gy);
+                    slot[5] += wx.w[kx] * wy.w[ky] * wall;
                 }
             }
         }
@@ -190,19 +203,23 @@ pub fn strips_to_nodes(
         mass,
         mom,
         force,
+        wall,
         active,
         ..
     } = nodes;
     (
         mass[range.clone()].par_chunks_mut(rows),
         mom[range.clone()].par_chunks_mut(rows),
-        force[range].par_chunks_mut(rows),
+        (
+            force[range.clone()].par_chunks_mut(rows),
+            wall[range].par_chunks_mut(rows),
+        ),
         active[first..first + count].par_iter_mut(),
     )
         .into_par_iter()
         .with_max_len(2)
         .enumerate()
-        .for_each(|(n, (mass, mom, force, act))| {
+        .for_each(|(n, (mass, mom, (force, wall), act))| {
             let i = node_cols.start + n as i64;
             let cs = (i - 2).max(0)..=(i + 1).min(nx - 1);
             let (mut lo, mut hi) = (i64::MAX, i64::MIN);
@@ -242,6 +259,7 @@ pub fn strips_to_nodes(
                 }
                 if what != P2g::MassMomentum {
                     force[r] = [acc[3], acc[4]];
+                    wall[r] = acc[5];
                 }
             }
         });

@@ -3,7 +3,7 @@
 
 use super::grains::GrainAnalysis;
 use super::schema::Check;
-use crate::mpm::{Boundaries, Scheme, ShapeKind};
+use crate::mpm::{Boundaries, Scheme, ShapeKind, SideWalls};
 use serde::{Deserialize, Serialize};
 
 /// An MPM scene.
@@ -61,6 +61,11 @@ pub struct MpmSpec {
     pub time_step: MpmTimeStep,
     /// Conditions on the four sides of the domain.
     pub boundaries: Boundaries,
+    /// Side walls of a quasi-two-dimensional channel, `{ gap_m, friction }`: Coulomb
+    /// friction μ_w |σ_zz| on both faces of the simulated plane, W = `gap_m` apart. Absent
+    /// (default): plane strain without walls.
+    #[serde(default)]
+    pub side_walls: Option<SideWalls>,
     /// Materials, referred to by name from the bodies.
     pub materials: Vec<MaterialSpec>,
     /// Bodies of material points.

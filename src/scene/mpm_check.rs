@@ -118,6 +118,29 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             "is a FLIP setting: remove it with velocity_transfer = \"apic\"",
         ));
     }
+    if let Some(w) = m.side_walls {
+        if !(w.gap_m > 0.0 && w.gap_m.is_finite()) {
+            return Err(ctx.err(
+                "side_walls",
+                0,
+                format!(
+                    "`gap_m` must be a positive distance between the walls (m), got {}",
+                    w.gap_m
+                ),
+            ));
+        }
+        if !(w.friction >= 0.0 && w.friction.is_finite()) {
+            return Err(ctx.err(
+                "side_walls",
+                0,
+                format!(
+                    "`friction` must be a Coulomb coefficient ≥ 0 (tan of the wall \
+                     friction angle), got {}",
+                    w.friction
+                ),
+            ));
+        }
+    }
     if !m.gravity_m_s2.iter().all(|g| g.is_finite()) {
         return Err(ctx.err("gravity_m_s2", 0, "must be finite"));
     }
@@ -289,6 +312,7 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
         },
         volumetric_averaging: m.volumetric_averaging,
         materials,
+        side_walls: m.side_walls,
     };
     Ok((setup, dt_cr, warnings))
 }
