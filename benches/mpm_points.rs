@@ -6,9 +6,10 @@
 //! functions, on 1 and 2 threads; then
 //! 10⁶ points (500 × 500 cells) on 1 and 2 threads. The column collapses during the timed
 //! steps, so the points move, re-sort and yield as in a production run.
-//! Last, the cost of the APIC transfer against FLIP on the CB-Geo problem.
+//! Last, the cost of the APIC transfer against FLIP, and of side walls (a quasi-2-D
+//! channel), on the CB-Geo problem.
 //! `cargo bench --bench mpm_points` (GRAINFLOW_BENCH_STEPS, default 300; GRAINFLOW_BENCH_ONLY
-//! = `cbgeo`, `million` or `apic` for one part).
+//! = `cbgeo`, `million`, `apic` or `walls` for one part).
 use decomposition::SingleProcess;
 use grainflow::mpm::mohr_coulomb::MohrCoulomb;
 use grainflow::mpm::*;
@@ -88,8 +89,20 @@ fn column(
 fn run(
     cx: usize,
     cy: usize,
+    kind: (ShapeKind, Scheme),
+    update: VelocityUpdate,
+    threads: usize,
+    steps: usize,
+) {
+    run_with(cx, cy, kind, update, None, threads, steps);
+}
+
+fn run_with(
+    cx: usize,
+    cy: usize,
     (shape, scheme): (ShapeKind, Scheme),
     update: VelocityUpdate,
+    walls: Option<SideWalls>,
     threads: usize,
     steps: usize,
 ) {
@@ -99,6 +112,7 @@ fn run(
         .unwrap();
     pool.install(|| {
         let mut s = column(cx, cy, shape, scheme, update);
+        s.setup.side_walls = walls;
         let n = s.points.len();
         for _ in 0..20 {
             s.step(&SingleProcess).unwrap();
@@ -115,7 +129,8 @@ fn run(
             .map(|(k, v)| format!("{k} {:.0} %", 100.0 * v / secs))
             .collect();
         println!(
-            "{n:>8} points {shape:?} {scheme:?} {update:?} {threads} thread(s): {:.3e} particle-steps/s ({:.0} ns per point-step); {}; yielded {}",
+            "{n:>8} points {shape:?} {scheme:?} {update:?}{} {threads} thread(s): {:.3e} particle-steps/s ({:.0} ns per point-step); {}; yielded {}",
+            if walls.is_some() { ", side walls" } else { "" },
             (n * steps) as f64 / secs,
             secs / (n * steps) as f64 * 1e9 * threads as f64,
             split.join(", "),
@@ -163,6 +178,26 @@ fn main() {
                     300,
                     (ShapeKind::Gimp, Scheme::Usf),
                     update,
+                    threads,
+                    steps,
+                );
+            }
+        }
+    }
+    if only.is_empty() || only == "walls" {
+        println!("Side walls (10 cm apart, μ_w = 0.46) against none: the CB-Geo problem, GIMP, USF, FLIP");
+        let walls = SideWalls {
+            gap_m: 0.1,
+            friction: 0.46,
+        };
+        for threads in [1, 2] {
+            for w in [None, Some(walls)] {
+                run_with(
+                    150,
+                    300,
+                    (ShapeKind::Gimp, Scheme::Usf),
+                    FLIP,
+                    w,
                     threads,
                     steps,
                 );

@@ -132,11 +132,11 @@ fn mpm_on_1_2_and_4_ranks_match_bit_for_bit() {
 }
 
 #[test]
-fn mpm_apic_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
+fn mpm_apic_side_walls_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
     let tmp = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(root().join(SCENE)).unwrap();
     // With APIC, so that the points' affine moments must survive migration and the
-    // checkpoint for the runs to agree.
+    // checkpoint for the runs to agree, and side walls, whose strips cross the slab faces.
     let with_ckpt = text
         .replace(
             "output_every_s = 0.04",
@@ -144,9 +144,13 @@ fn mpm_apic_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
         )
         .replace(
             "update = \"usf\"",
-            "update = \"usf\"\nvelocity_transfer = \"apic\"",
+            "update = \"usf\"\nvelocity_transfer = \"apic\"\nside_walls = { gap_m = 0.1, friction = 0.46 }",
         );
-    assert!(with_ckpt.contains("apic") && with_ckpt.contains("checkpoint_every"));
+    assert!(
+        with_ckpt.contains("apic")
+            && with_ckpt.contains("checkpoint_every")
+            && with_ckpt.contains("side_walls")
+    );
     let scene = tmp.path().join("ckpt.toml");
     std::fs::write(&scene, with_ckpt).unwrap();
     let (full, part, cont) = (

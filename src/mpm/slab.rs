@@ -109,14 +109,18 @@ impl MpmSystem {
             return;
         }
         let own = self.own_columns();
+        // Each strip: first row, rows, side-wall slots (0 or 4 × rows), then the slots and
+        // the side-wall slots.
         let pack = |cols: std::ops::Range<usize>, strips: &[Strip]| {
             let mut out = Vec::new();
             for s in &strips[cols] {
                 out.push(s.row_lo as f64);
                 out.push(s.rows as f64);
+                out.push(s.wall.len() as f64);
                 for slot in &s.data[..s.rows * 4] {
                     out.extend_from_slice(slot);
                 }
+                out.extend_from_slice(&s.wall);
             }
             out
         };
@@ -134,7 +138,8 @@ impl MpmSystem {
                 let s = &mut self.strips[c];
                 s.row_lo = msg[at] as i64;
                 s.rows = msg[at + 1] as usize;
-                at += 2;
+                let walls = msg[at + 2] as usize;
+                at += 3;
                 s.data.clear();
                 for slot in msg[at..at + s.rows * 4 * Q].chunks_exact(Q) {
                     let mut v = [0.0; Q];
@@ -142,6 +147,9 @@ impl MpmSystem {
                     s.data.push(v);
                 }
                 at += s.rows * 4 * Q;
+                s.wall.clear();
+                s.wall.extend_from_slice(&msg[at..at + walls]);
+                at += walls;
             }
         }
     }

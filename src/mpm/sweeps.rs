@@ -20,6 +20,8 @@ pub struct NodeUpdate {
     pub damping: f64,
     /// Nodes lighter than this (kg/m) are treated as empty.
     pub min_mass: f64,
+    /// Whether the nodes' side-wall force (`NodeFields::wall`) applies.
+    pub side_walls: bool,
 }
 
 /// Apply the domain's boundary conditions to velocity `v` of node (i, j).
@@ -138,7 +140,9 @@ pub fn update_nodes(
                     }
                     v[d] += u.dt * f_d / m[r];
                 }
-                apply_side_walls(u.dt * w[r] / m[r], &mut v);
+                if u.side_walls {
+                    apply_side_walls(u.dt * w[r] / m[r], &mut v);
+                }
                 constrain(b, spec, i, r as i64 - 1, &mut v);
                 vn[r] = v;
             }

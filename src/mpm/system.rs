@@ -62,6 +62,13 @@ pub struct MpmSetup {
     pub side_walls: Option<SideWalls>,
 }
 
+impl MpmSetup {
+    /// The side walls' 2 μ_w / W (1/m); 0 without side walls.
+    pub fn wall_coefficient(&self) -> f64 {
+        self.side_walls.map_or(0.0, |w| w.coefficient())
+    }
+}
+
 /// The CFL limit h / c (s), c the largest wave speed of a stress-carrying point (see
 /// [`Material::max_wave_speed`]; the initial one without separation, checked every step).
 pub fn critical_dt(materials: &[Material], h: f64) -> f64 {
@@ -229,11 +236,7 @@ impl MpmSystem {
         particles_to_strips(
             &self.points,
             &self.columns,
-            (
-                &s.spec,
-                s.shape,
-                s.side_walls.map_or(0.0, |w| w.coefficient()),
-            ),
+            (&s.spec, s.shape, s.wall_coefficient()),
             (what, s.velocity_update == VelocityUpdate::Apic),
             &mut self.strips[own.clone()],
             own.start,
@@ -241,7 +244,8 @@ impl MpmSystem {
         self.exchange_strips(comm);
         let cols = self.node_cols();
         let spec = self.setup.spec;
-        strips_to_nodes(&self.strips, &spec, what, cols, &mut self.nodes);
+        let walls = self.setup.wall_coefficient() > 0.0;
+        strips_to_nodes(&self.strips, &spec, (what, walls), cols, &mut self.nodes);
     }
 
     fn node_update(&self) -> NodeUpdate {
@@ -250,6 +254,7 @@ impl MpmSystem {
             dt: self.setup.dt,
             damping: self.setup.damping,
             min_mass: self.min_mass,
+            side_walls: self.setup.wall_coefficient() > 0.0,
         }
     }
 

@@ -13,19 +13,18 @@ use super::points::Points;
 use super::shape::{half_lengths, node_offset, weights_1d, ShapeKind, Weights1d};
 use rayon::prelude::*;
 
-/// Quantities one node slot accumulates: mass, momentum x/y, internal force x/y, and the
-/// largest side-wall friction force (see [`super::grid::SideWalls`]).
-pub const Q: usize = 6;
+/// Quantities one node slot accumulates: mass, momentum x/y, internal force x/y.
+pub const Q: usize = 5;
 
 /// What a particle-to-grid pass accumulates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum P2g {
     /// Mass and momentum.
     MassMomentum,
-    /// Internal force −V σ·∇S and the side-wall force only (mass and momentum slots left
-    /// zero).
+    /// Internal force −V σ·∇S only (mass and momentum slots left zero), and the side-wall
+    /// force where there are side walls.
     Force,
-    /// All six quantities.
+    /// All five quantities (and the side-wall force).
     All,
 }
 
@@ -39,6 +38,9 @@ pub struct Strip {
     pub rows: usize,
     /// The slots, row-major with four node columns per row.
     pub data: Vec<[f64; Q]>,
+    /// The side walls' largest friction force per slot, laid out as `data` (N/m); empty
+    /// without side walls and in mass-and-momentum passes.
+    pub wall: Vec<f64>,
 }
 
 /// The canonical order of the points and where each cell column starts in it.
@@ -77,6 +79,7 @@ pub fn particles_to_strips(
         .for_each(|(k, strip)| {
             let c = first_col + k;
             let list = &columns.order[columns.start[c]..columns.start[c + 1]];
+            strip.wall.clear();
             let (Some(&first), Some(&last)) = (list.first(), list.last()) else {
                 strip.rows = 0;
                 strip.data.clear();
@@ -87,22 +90,32 @@ pub fn particles_to_strips(
                 (columns.cell[last as usize][1] as i64 + pad_hi - strip.row_lo + 1) as usize;
             strip.data.clear();
             strip.data.resize(strip.rows * 4, [0.0; Q]);
+            let with_walls = walls > 0.0 && what != P2g::MassMomentum;
+            if with_walls {
+                strip.wall.resize(strip.rows * 4, 0.0);
+            }
             let args = (points, columns, spec, kind, list, walls);
-            match (what, affine) {
-                (P2g::MassMomentum, false) => accumulate::<true, false, false>(args, strip),
-                (P2g::MassMomentum, true) => accumulate::<true, false, true>(args, strip),
-                (P2g::Force, _) => accumulate::<false, true, false>(args, strip),
-                (P2g::All, false) => accumulate::<true, true, false>(args, strip),
-                (P2g::All, true) => accumulate::<true, true, true>(args, strip),
+            match (what, affine, with_walls) {
+                (P2g::MassMomentum, false, _) => {
+                    accumulate::<true, false, false, false>(args, strip)
+                }
+                (P2g::MassMomentum, true, _) => accumulate::<true, false, true, false>(args, strip),
+                (P2g::Force, _, false) => accumulate::<false, true, false, false>(args, strip),
+                (P2g::Force, _, true) => accumulate::<false, true, false, true>(args, strip),
+                (P2g::All, false, false) => accumulate::<true, true, false, false>(args, strip),
+                (P2g::All, true, false) => accumulate::<true, true, true, false>(args, strip),
+                (P2g::All, false, true) => accumulate::<true, true, false, true>(args, strip),
+                (P2g::All, true, true) => accumulate::<true, true, true, true>(args, strip),
             }
         });
 }
 
 /// Add the contributions of the points `list` (one cell column, canonical order) to
 /// `strip`: mass and momentum when `MASS`, internal force when `FORCE`; with `AFFINE` the
-/// momentum carries the points' affine velocity (APIC).
+/// momentum carries the points' affine velocity (APIC); with `WALLS` (and `FORCE`) the side
+/// walls' largest friction force goes to `strip.wall`.
 #[inline(always)]
-fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
+fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool, const WALLS: bool>(
     (points, columns, spec, kind, list, walls): (
         &Points,
         &Columns,
@@ -138,7 +151,7 @@ fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
             (0.0, [0.0; 4])
         };
         // The side walls' largest friction force, 2 μ_w/W V_p |σ_zz| (Janssen 1895).
-        let wall = walls * vol * s[3].abs();
+        let wall = if WALLS { walls * vol * s[3].abs() } else { 0.0 };
         let base = (pr as i64 - 1 - strip.row_lo) as usize;
         for ky in wy.first..wy.first + wy.count {
             let row = (base + ky) * 4;
@@ -164,7 +177,9 @@ fn accumulate<const MASS: bool, const FORCE: bool, const AFFINE: bool>(
                     // f_int = −Σ_p V_p σ_p · ∇S_Ip (Sulsky et al. 1994, eq. 23).
                     slot[3] -= vol * (s[0] * gx + s[2] * gy);
                     slot[4] -= vol * (s[2] * gx + s[1] * gy);
-                    slot[5] += wx.w[kx] * wy.w[ky] * wall;
+                }
+                if WALLS {
+                    strip.wall[row + kx] += wx.w[kx] * wy.w[ky] * wall;
                 }
             }
         }
@@ -186,11 +201,12 @@ pub fn inertia_1d(w: &Weights1d, cell: u32, h: f64, x: f64) -> f64 {
 
 /// Sum the strips into the node fields for the node columns `node_cols` (global node
 /// column indices, −1 ≤ I ≤ nx+1), in ascending cell-column order. `what` selects which
-/// node fields are (over)written; `active` is recomputed for mass passes.
+/// node fields are (over)written; `active` is recomputed for mass passes. With `walls` the
+/// force passes also sum the side-wall force.
 pub fn strips_to_nodes(
     strips: &[Strip],
     spec: &GridSpec,
-    what: P2g,
+    (what, walls): (P2g, bool),
     node_cols: std::ops::Range<i64>,
     nodes: &mut NodeFields,
 ) {
@@ -243,13 +259,18 @@ pub fn strips_to_nodes(
             for r in r0..r1 {
                 let j = r as i64 - 1;
                 let mut acc = [0.0; Q];
+                let mut w = 0.0;
                 for c in cs.clone() {
                     let s = &strips[c as usize];
                     let k = (i - c + 1) as usize;
                     if j >= s.row_lo && j < s.row_lo + s.rows as i64 {
-                        let v = &s.data[(j - s.row_lo) as usize * 4 + k];
+                        let at = (j - s.row_lo) as usize * 4 + k;
+                        let v = &s.data[at];
                         for q in 0..Q {
                             acc[q] += v[q];
+                        }
+                        if walls && what != P2g::MassMomentum {
+                            w += s.wall[at];
                         }
                     }
                 }
@@ -259,7 +280,9 @@ pub fn strips_to_nodes(
                 }
                 if what != P2g::MassMomentum {
                     force[r] = [acc[3], acc[4]];
-                    wall[r] = acc[5];
+                    if walls {
+                        wall[r] = w;
+                    }
                 }
             }
         });
