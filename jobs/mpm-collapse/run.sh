@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The MPM column-collapse sweep (a = 0.5, 1, 2, 4, 8 at 4 mm cells, FLIP + 5 % PIC) and the
 # studies: rough base, 2 mm cells, shape functions, points per cell, pure FLIP, APIC, mu(I)
-# friction; then the table and the plot with the DEM sweep and the published laws.
+# friction, side walls; then the table and the plot with the DEM sweep and the published laws.
 # Usage: [THREADS=n] jobs/mpm-collapse/run.sh [ranks] [scene names...]   (all scenes: about
-# two hours on 2 cores; e.g. `run.sh 1 a0.5 a1 a2` for the short columns)
+# two and a half hours on 2 cores; e.g. `run.sh 1 a0.5 a1 a2` for the short columns)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 ranks=${1:-1}
@@ -19,7 +19,12 @@ if [ ${#names[@]} -eq 0 ]; then
          a4-h2mm a4-linear a4-h2mm-linear a4-ppc4 a4-flip
          a0.5-apic a1-apic a2-apic a4-apic a8-apic a0.5-h2mm-apic a1-h2mm-apic a2-h2mm-apic
          a0.5-mui a1-mui a2-mui a4-mui a8-mui a0.5-h2mm-mui a1-h2mm-mui a2-h2mm-mui a4-h2mm-mui
-         a0.5-apic-mui a1-apic-mui a2-apic-mui a4-apic-mui a8-apic-mui)
+         a0.5-apic-mui a1-apic-mui a2-apic-mui a4-apic-mui a8-apic-mui
+         a0.5-apic-w5 a1-apic-w5 a2-apic-w5 a0.5-apic-w10 a1-apic-w10 a2-apic-w10 a4-apic-w10
+         a8-apic-w10 a0.5-apic-w20 a1-apic-w20 a2-apic-w20
+         a0.5-apic-mui-w5 a1-apic-mui-w5 a2-apic-mui-w5 a0.5-apic-mui-w10 a1-apic-mui-w10
+         a2-apic-mui-w10 a4-apic-mui-w10 a8-apic-mui-w10 a0.5-apic-mui-w20 a1-apic-mui-w20
+         a2-apic-mui-w20 a0.5-h2mm-apic-mui-w10 a1-h2mm-apic-mui-w10 a2-h2mm-apic-mui-w10)
 fi
 for name in "${names[@]}"; do
   scene=jobs/mpm-collapse/$name.toml
