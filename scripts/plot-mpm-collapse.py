@@ -58,10 +58,12 @@ def main():
             main_rows.append((a, ro))
         elif name.endswith("-rough") and "h2mm" not in name:
             rough_rows.append((a, ro))
-        elif name.endswith("-apic-w10"):
+        elif name.endswith("-apic-w10") and "h2mm" not in name:
             walls_rows.append((a, ro))
-        elif name.endswith("-apic-mui-w10"):
+        elif name.endswith("-apic-mui-w10") and "h2mm" not in name:
             walls_mui_rows.append((a, ro))
+        elif "-w" in name:
+            pass
         elif name.endswith("-apic-mui"):
             apic_mui_rows.append((a, ro))
         elif name.endswith("-apic") and "h2mm" not in name:
@@ -87,7 +89,7 @@ def main():
     except ImportError:
         print("matplotlib not installed: table only")
         return
-    fig, ax = plt.subplots(figsize=(6, 4.5))
+    fig, ax = plt.subplots(figsize=(9.5, 4.5))
     xs = [0.4 * 1.05 ** i for i in range(82)]
     ax.loglog(xs, [law(a, EXP) for a in xs], "k-", label="experiments (Lajeunesse et al. 2005)")
     ax.loglog(xs, [law(a, DEM) for a in xs], "k--", label="published 2-D DEM law")
@@ -109,7 +111,7 @@ def main():
                       mfc="none" if marker == "d" else color, label="grainflow MPM, " + label)
     ax.set_xlabel("aspect ratio a = H_i / L_i")
     ax.set_ylabel("run-out (L_f - L_i) / L_i")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     fig.savefig(args.out, dpi=120)
