@@ -29,7 +29,7 @@ SEP = 1.15
 
 
 def scene(a, h=0.004, ppc=2, shape="gimp", update="usf", li=0.1, title_extra="", avg=True, pic=0.05,
-          base=None, mu_i=False, walls=None):
+          base=None, mu_i=False, walls=None, phi=PHI):
     hi = a * li
     # Run-out room: 2x the experiments' law plus margin; flows stop by ~6 tau_c.
     runout = (1.2 * a if a < 2.3 else 1.9 * a ** (2 / 3)) * li
@@ -39,7 +39,7 @@ def scene(a, h=0.004, ppc=2, shape="gimp", update="usf", li=0.1, title_extra="",
     nx, ny = math.ceil(width / h), math.ceil(height / h)
     tau_c = math.sqrt(hi / 9.81)
     end = max(8.0 * tau_c, 0.4)
-    k0 = 1 - math.sin(math.radians(PHI))
+    k0 = 1 - math.sin(math.radians(phi))
     title = f"MPM granular column collapse, a = {a}{title_extra}"
     side_walls = f"side_walls = {{ gap_m = {walls}, friction = {WALL_MU:.4f} }}\n" if walls else ""
     return f'''# {title}: GIMP/MPM with Mohr-Coulomb (seed study ch. 4, Lajeunesse et al. 2005).
@@ -71,7 +71,7 @@ model = "mohr-coulomb"
 density_kg_m3 = 1925.0
 youngs_modulus_pa = 1.98e6
 poisson_ratio = 0.3
-friction_deg = {PHI}
+friction_deg = {phi}
 dilation_deg = 0.0
 cohesion_pa = 0.0
 separation_volume_ratio = {SEP}
@@ -146,6 +146,12 @@ def main():
             files[f"a{a:g}-apic-mui-w{gap_cm}.toml"] = scene(
                 a, pic=None, mu_i=True, walls=gap_cm / 100,
                 title_extra=f" (APIC, mu(I) friction, side walls {gap_cm} cm apart)")
+    # Friction whose plane-strain, non-dilatant flow mobilises the repose angle:
+    # sin(phi) = tan(22 deg), phi = 23.83 deg.
+    for a in [0.5, 1, 2]:
+        files[f"a{a:g}-apic-mui-w10-phi23.8.toml"] = scene(
+            a, pic=None, mu_i=True, walls=0.1, phi=23.83,
+            title_extra=" (APIC, mu(I) friction, side walls 10 cm apart, phi = 23.83 deg)")
     for a in [0.5, 1, 2]:
         files[f"a{a:g}-h2mm-apic-mui-w10.toml"] = scene(
             a, h=0.002, pic=None, mu_i=True, walls=0.1,

@@ -24,7 +24,8 @@ if [ ${#names[@]} -eq 0 ]; then
          a8-apic-w10 a0.5-apic-w20 a1-apic-w20 a2-apic-w20
          a0.5-apic-mui-w5 a1-apic-mui-w5 a2-apic-mui-w5 a0.5-apic-mui-w10 a1-apic-mui-w10
          a2-apic-mui-w10 a4-apic-mui-w10 a8-apic-mui-w10 a0.5-apic-mui-w20 a1-apic-mui-w20
-         a2-apic-mui-w20 a0.5-h2mm-apic-mui-w10 a1-h2mm-apic-mui-w10 a2-h2mm-apic-mui-w10)
+         a2-apic-mui-w20 a0.5-h2mm-apic-mui-w10 a1-h2mm-apic-mui-w10 a2-h2mm-apic-mui-w10
+         a0.5-apic-mui-w10-phi23.8 a1-apic-mui-w10-phi23.8 a2-apic-mui-w10-phi23.8)
 fi
 for name in "${names[@]}"; do
   scene=jobs/mpm-collapse/$name.toml
