@@ -5,17 +5,6 @@
 use decomposition::SingleProcess;
 use grainflow::mpm::*;
 
-fn elastic(e: f64, nu: f64, rho: f64) -> Material {
-    Material {
-        density: rho,
-        separation_volume_ratio: f64::INFINITY,
-        model: Model::LinearElastic {
-            youngs_modulus_pa: e,
-            poisson_ratio: nu,
-        },
-    }
-}
-
 fn setup(spec: GridSpec, b: Boundaries, g: [f64; 2], m: Material, walls: SideWalls) -> MpmSetup {
     let dt = 0.5 * critical_dt(&[m], spec.h);
     MpmSetup {
@@ -80,7 +69,13 @@ fn block_between_frictional_walls_stops_at_the_coulomb_distance() {
         pts.stress[i] = [0.0, 0.0, 0.0, -p0];
         pts.vel[i] = v0;
     }
-    let s = setup(spec, OPEN, [0.0, 0.0], elastic(1.0e7, 0.3, rho), walls);
+    let s = setup(
+        spec,
+        OPEN,
+        [0.0, 0.0],
+        Material::linear_elastic(1.0e7, 0.3, rho),
+        walls,
+    );
     let dt = s.dt;
     let mut sys = MpmSystem::new(s, pts, &SingleProcess).expect("system");
     let centre = |s: &MpmSystem| {
@@ -174,7 +169,13 @@ fn column_between_frictional_walls_follows_janssen() {
         gap_m: gap,
         friction: mu,
     };
-    let s = setup(spec, b, [0.0, 0.0], elastic(e, nu, rho), walls);
+    let s = setup(
+        spec,
+        b,
+        [0.0, 0.0],
+        Material::linear_elastic(e, nu, rho),
+        walls,
+    );
     let mut sys = MpmSystem::new(s, pts, &SingleProcess).expect("system");
     let ramp = 3.0;
     while sys.time < 1.5 * ramp {

@@ -7,14 +7,7 @@ use grainflow::mpm::*;
 use grainflow::mpm::{shape, transfer};
 
 fn setup(shape: ShapeKind, update: VelocityUpdate, spec: GridSpec, e: f64) -> MpmSetup {
-    let m = Material {
-        density: 1000.0,
-        separation_volume_ratio: f64::INFINITY,
-        model: Model::LinearElastic {
-            youngs_modulus_pa: e,
-            poisson_ratio: 0.3,
-        },
-    };
+    let m = Material::linear_elastic(e, 0.3, 1000.0);
     let dt = 0.5 * critical_dt(&[m], spec.h);
     MpmSetup {
         spec,

@@ -6,17 +6,6 @@ use decomposition::SingleProcess;
 use grainflow::mpm::mohr_coulomb;
 use grainflow::mpm::*;
 
-fn elastic(e: f64, nu: f64, rho: f64) -> Material {
-    Material {
-        density: rho,
-        separation_volume_ratio: f64::INFINITY,
-        model: Model::LinearElastic {
-            youngs_modulus_pa: e,
-            poisson_ratio: nu,
-        },
-    }
-}
-
 fn setup(
     spec: GridSpec,
     shape: ShapeKind,
@@ -76,7 +65,14 @@ fn wave_speed(shape: ShapeKind, scheme: Scheme) -> f64 {
     for i in 0..pts.len() {
         pts.vel[i][0] = v0 * (std::f64::consts::FRAC_PI_2 * pts.pos[i][0] / len).sin();
     }
-    let s = setup(spec, shape, scheme, b, [0.0; 2], elastic(e, 0.0, rho));
+    let s = setup(
+        spec,
+        shape,
+        scheme,
+        b,
+        [0.0; 2],
+        Material::linear_elastic(e, 0.0, rho),
+    );
     let mut sys = MpmSystem::new(s, pts, &SingleProcess).expect("system");
     let c = (e / rho).sqrt();
     let period = 4.0 * len / c;
@@ -144,7 +140,14 @@ fn elastic_column_geostatic_stress_within_2_percent() {
         let mut pts = Points::default();
         rect(&mut pts, &spec, [0.0, 0.0], [0.2, height], 2, rho);
         let y0: Vec<f64> = pts.pos.iter().map(|p| p[1]).collect();
-        let mut s = setup(spec, shape, Scheme::Usf, b, [0.0, -g], elastic(e, nu, rho));
+        let mut s = setup(
+            spec,
+            shape,
+            Scheme::Usf,
+            b,
+            [0.0, -g],
+            Material::linear_elastic(e, nu, rho),
+        );
         s.damping = 0.1;
         let mut sys = MpmSystem::new(s, pts, &SingleProcess).expect("system");
         while sys.time < 1.5 {
@@ -228,7 +231,7 @@ fn block_slides_on_frictional_incline_within_3_percent() {
                 scheme,
                 b,
                 grav,
-                elastic(5.0e7, 0.3, rho),
+                Material::linear_elastic(5.0e7, 0.3, rho),
             ),
             pts,
             &SingleProcess,

@@ -41,6 +41,19 @@ pub fn lame(e: f64, nu: f64) -> (f64, f64) {
 }
 
 impl Material {
+    /// A linear elastic material that never separates: Young's modulus (Pa), Poisson's
+    /// ratio (< ½) and density (kg/m³).
+    pub fn linear_elastic(youngs_modulus_pa: f64, poisson_ratio: f64, density: f64) -> Self {
+        Material {
+            density,
+            separation_volume_ratio: f64::INFINITY,
+            model: Model::LinearElastic {
+                youngs_modulus_pa,
+                poisson_ratio,
+            },
+        }
+    }
+
     /// Young's modulus and Poisson's ratio of the elastic part.
     pub fn elastic(&self) -> (f64, f64) {
         match self.model {
