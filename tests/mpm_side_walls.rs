@@ -51,8 +51,8 @@ const OPEN: Boundaries = Boundaries {
 /// sliding |v₀|² / (2a) (within 0.5 %: the explicit steps), and never move back.
 /// The direction is kept to 1e-6 rad, not to round-off: from the second step the block's
 /// free edges carry in-plane stresses of about 0.02 Pa, and the same block without wall
-/// friction turns by the same 1e-8 to 1e-7 rad. It comes from the free edges, where nodes
-/// with a sliver of mass fall below the grid's mass cutoff, not from the walls.
+/// friction turns by the same 1e-8 to 1e-7 rad, so it is not the walls (the edges' nodes
+/// that hold a sliver of mass are the likely source; not isolated).
 #[test]
 fn block_between_frictional_walls_stops_at_the_coulomb_distance() {
     let (rho, p0, mu, gap) = (2000.0, 4.0e3, 0.5, 0.1);
