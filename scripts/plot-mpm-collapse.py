@@ -28,6 +28,25 @@ def law(a, c):
     return lin * a if a < t else pow_ * a ** (2 / 3)
 
 
+def thick_front(run_dir, min_height, li):
+    """Run-out to the farthest cell column, contiguous from the wall, whose highest point
+    centre in the last snapshot of mpm.h5 is at least min_height (m) above the floor."""
+    import h5py
+    import numpy as np
+    s = json.load(open(os.path.join(run_dir, "summary.json")))
+    h = s["cell_size_m"]
+    with h5py.File(os.path.join(run_dir, "mpm.h5"), "r") as f:
+        last = sorted(k for k in f if k.startswith("step_"))[-1]
+        pos = f[last]["position"][:, :2]
+    cols = (pos[:, 0] / h).astype(int)
+    top = np.zeros(cols.max() + 2)
+    np.maximum.at(top, cols, pos[:, 1])
+    i = 0
+    while i < len(top) and top[i] >= min_height:
+        i += 1
+    return (i * h - li) / li
+
+
 def load(folder):
     runs = {}
     for f in sorted(glob.glob(os.path.join(folder, "*", "summary.json"))):
@@ -43,6 +62,9 @@ def main():
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("runs", help="folder with one run folder per scene")
     p.add_argument("--out", default=None, help="PNG to write")
+    p.add_argument("--front-min-height", type=float, default=None, metavar="M",
+                   help="also print the run-out to where the deposit's top point centre drops "
+                        "below M metres (needs h5py)")
     args = p.parse_args()
     runs = load(args.runs)
     main_rows, rough_rows, mui_rows, apic_rows, apic_mui_rows = [], [], [], [], []
@@ -52,8 +74,13 @@ def main():
         r = s["results"]
         a, ro = r["collapse.aspect_ratio"], r["collapse.runout"]
         e, d = law(a, EXP), law(a, DEM)
+        thick = ""
+        if args.front_min_height:
+            t = thick_front(os.path.join(args.runs, name), args.front_min_height,
+                            r["collapse.initial_length_m"])
+            thick = f"  thick front {t:.3f} ({100*(t/e-1):+.0f}% vs exp.)"
         print(f"{name:>17} {a:5.2f} {s['points']:7d} {ro:7.3f} {e:6.3f} {100*(ro/e-1):+6.1f}% {d:7.3f} {100*(ro/d-1):+6.1f}% "
-              f"{r['collapse.final_height']:7.3f} {r['collapse.stop_time']:7.2f} {s['point_steps_per_s']/1e6:6.2f}")
+              f"{r['collapse.final_height']:7.3f} {r['collapse.stop_time']:7.2f} {s['point_steps_per_s']/1e6:6.2f}{thick}")
         if "-" not in name:
             main_rows.append((a, ro))
         elif name.endswith("-rough") and "h2mm" not in name:
