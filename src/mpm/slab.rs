@@ -109,8 +109,8 @@ impl MpmSystem {
             return;
         }
         let own = self.own_columns();
-        // Each strip: first row, rows, side-wall slots (0 or 4 × rows), then the slots and
-        // the side-wall slots.
+        // Each strip: first row, row count, number of side-wall slots (0 or 4 × rows), the
+        // slots, then the side-wall slots.
         let pack = |cols: std::ops::Range<usize>, strips: &[Strip]| {
             let mut out = Vec::new();
             for s in &strips[cols] {
