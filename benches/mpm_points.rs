@@ -46,23 +46,16 @@ fn column(
             inertial_friction: None,
         }),
     };
+    let boundaries = Boundaries {
+        left: Side::Roller,
+        right: Side::Roller,
+        bottom: Side::Frictional { friction: 0.46 },
+        top: Side::Open,
+    };
     let setup = MpmSetup {
-        spec,
-        shape,
         scheme,
-        boundaries: Boundaries {
-            left: Side::Roller,
-            right: Side::Roller,
-            bottom: Side::Frictional { friction: 0.46 },
-            top: Side::Open,
-        },
-        gravity: [0.0, -9.81],
-        dt: 0.5 * critical_dt(&[mat], h),
-        damping: 0.0,
         velocity_update: update,
-        volumetric_averaging: false,
-        materials: vec![mat],
-        side_walls: None,
+        ..MpmSetup::plain(spec, shape, boundaries, [0.0, -9.81], mat)
     };
     let mut pts = Points::default();
     let (w, ht) = (cells_x as f64 * h, cells_y as f64 * h);

@@ -6,19 +6,9 @@ use decomposition::SingleProcess;
 use grainflow::mpm::*;
 
 fn setup(spec: GridSpec, b: Boundaries, g: [f64; 2], m: Material, walls: SideWalls) -> MpmSetup {
-    let dt = 0.5 * critical_dt(&[m], spec.h);
     MpmSetup {
-        spec,
-        shape: ShapeKind::Gimp,
-        scheme: Scheme::Usf,
-        boundaries: b,
-        gravity: g,
-        dt,
-        damping: 0.0,
-        velocity_update: VelocityUpdate::Flip { pic: 0.0 },
-        volumetric_averaging: false,
-        materials: vec![m],
         side_walls: Some(walls),
+        ..MpmSetup::plain(spec, ShapeKind::Gimp, b, g, m)
     }
 }
 

@@ -7,25 +7,16 @@ use grainflow::mpm::*;
 use grainflow::mpm::{shape, transfer};
 
 fn setup(shape: ShapeKind, update: VelocityUpdate, spec: GridSpec, e: f64) -> MpmSetup {
+    let open = Boundaries {
+        left: Side::Open,
+        right: Side::Open,
+        bottom: Side::Open,
+        top: Side::Open,
+    };
     let m = Material::linear_elastic(e, 0.3, 1000.0);
-    let dt = 0.5 * critical_dt(&[m], spec.h);
     MpmSetup {
-        spec,
-        shape,
-        scheme: Scheme::Usf,
-        boundaries: Boundaries {
-            left: Side::Open,
-            right: Side::Open,
-            bottom: Side::Open,
-            top: Side::Open,
-        },
-        gravity: [0.0; 2],
-        dt,
-        damping: 0.0,
         velocity_update: update,
-        volumetric_averaging: false,
-        materials: vec![m],
-        side_walls: None,
+        ..MpmSetup::plain(spec, shape, open, [0.0; 2], m)
     }
 }
 

@@ -14,19 +14,9 @@ fn setup(
     g: [f64; 2],
     m: Material,
 ) -> MpmSetup {
-    let dt = 0.5 * critical_dt(&[m], spec.h);
     MpmSetup {
-        spec,
-        shape,
         scheme,
-        boundaries: b,
-        gravity: g,
-        dt,
-        damping: 0.0,
-        velocity_update: VelocityUpdate::Flip { pic: 0.0 },
-        volumetric_averaging: false,
-        materials: vec![m],
-        side_walls: None,
+        ..MpmSetup::plain(spec, shape, b, g, m)
     }
 }
 

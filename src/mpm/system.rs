@@ -63,6 +63,30 @@ pub struct MpmSetup {
 }
 
 impl MpmSetup {
+    /// A plain setup of one material: USF, Δt = ½ of the CFL limit, no damping, pure FLIP,
+    /// no volumetric averaging, no side walls. Override fields with struct update syntax.
+    pub fn plain(
+        spec: GridSpec,
+        shape: ShapeKind,
+        boundaries: Boundaries,
+        gravity: [f64; 2],
+        material: Material,
+    ) -> Self {
+        MpmSetup {
+            spec,
+            shape,
+            scheme: Scheme::Usf,
+            boundaries,
+            gravity,
+            dt: 0.5 * critical_dt(&[material], spec.h),
+            damping: 0.0,
+            velocity_update: VelocityUpdate::Flip { pic: 0.0 },
+            volumetric_averaging: false,
+            materials: vec![material],
+            side_walls: None,
+        }
+    }
+
     /// The side walls' 2 μ_w / W (1/m); 0 without side walls.
     pub fn wall_coefficient(&self) -> f64 {
         self.side_walls.map_or(0.0, |w| w.coefficient())
