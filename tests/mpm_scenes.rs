@@ -227,6 +227,10 @@ fn bad_mpm_scenes_name_the_field() {
         &["limit_friction_deg", "above the static friction_deg"],
     );
     refused(
+        &with(&mu_i.replace("= 32.76", "= 50.0")),
+        &["limit_friction_deg", "below 45"],
+    );
+    refused(
         &with(&mu_i.replace("= 2500.0", "= 1000.0")),
         &["grain_density_kg_m3", "bulk density"],
     );

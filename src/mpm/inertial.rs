@@ -2,21 +2,32 @@
 //! Pouliquen (2006) applied to the Mohr–Coulomb friction angle.
 //!
 //! A rate-independent Mohr–Coulomb material has one friction whatever the shear rate. In a
-//! dense granular flow the friction grows with the inertial number I = γ̇ d / √(p/ρ_s), the
-//! ratio of the time a grain takes to fall into a hole under the pressure p to the time
-//! the shear takes to move it by one grain (GDR MiDi 2004). Here the friction coefficient
-//! tan φ of the Mohr–Coulomb surface follows
-//! tan φ(I) = μ_s + (μ₂ − μ_s) I / (I₀ + I),
-//! with μ_s = tan φ of the static material (its friction angle in the scene) and μ₂ the
-//! friction reached at high I. The law is evaluated explicitly, from the point's stress at
-//! the start of the step and the step's velocity gradient; the return mapping then uses
-//! the friction angle of that I.
+//! dense granular flow the friction grows with the inertial number I = γ̇ d / √(P/ρ_s), the
+//! ratio of the time a grain takes to fall into a hole under the pressure P to the time
+//! the shear takes to move it by one grain (GDR MiDi 2004). The law
+//! μ(I) = μ_s + (μ₂ − μ_s) I / (I₀ + I)
+//! gives the ratio of shear to normal stress on the shear plane of a steady simple shear,
+//! which is what inclined-plane experiments measure (tan θ of the slope, Jop et al. 2005).
+//!
+//! **Which Mohr–Coulomb angle carries μ(I).** A plane-strain Mohr–Coulomb material with
+//! dilation angle ψ = 0 flows in steady simple shear with its principal axes at 45° to the
+//! shear plane (the plastic strain rate is coaxial with the stress and isochoric). The shear
+//! plane is then the plane of largest shear stress, where τ/σ_n = sin φ, not tan φ (Vermeer
+//! & de Borst 1984; Nedderman 1992, §3.6). So the law sets sin φ(I) = μ(I), with the static
+//! μ_s = sin φ of the scene's friction angle, and P is the normal stress on the shear plane,
+//! the in-plane mean −(σxx + σyy)/2 (the out-of-plane σzz of plane strain does not press on
+//! it). Setting tan φ(I) = μ(I) instead, as an earlier version did, lets a layer flow
+//! steadily on a slope of only atan(sin φ(I)): on a 25° incline that is three times Bagnold's
+//! surface speed (`tests/mpm_inertial_flow.rs`).
+//!
+//! The law is evaluated explicitly, from the point's stress at the start of the step and
+//! the step's velocity gradient; the return mapping then uses the friction angle of that I.
 
 /// Parameters of the μ(I) law for one material (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InertialFriction {
     /// Friction coefficient μ₂ = tan φ₂ approached at high inertial number (–), above the
-    /// static μ_s.
+    /// static μ_s = sin φ and below 1 (sin φ(I) = μ(I) must stay a sine).
     pub limit_friction: f64,
     /// I₀ (–): the inertial number at which half of μ₂ − μ_s is mobilised.
     pub reference_inertial_number: f64,
@@ -38,13 +49,14 @@ impl InertialFriction {
         (2.0 * (dxx * dxx + dyy * dyy + dzz * dzz + 2.0 * dxy * dxy)).sqrt()
     }
 
-    /// Inertial number I = γ̇ d / √(p / ρ_s) (GDR MiDi 2004) of a point with velocity
+    /// Inertial number I = γ̇ d / √(P / ρ_s) (GDR MiDi 2004) of a point with velocity
     /// gradient `l` (1/s) and stress `stress` = [σxx, σyy, σxy, σzz] (Pa, tension positive),
-    /// p = −tr σ / 3. A point without pressure (p ≤ 0) has I = ∞ (no contacts hold it);
-    /// a point at rest under pressure has I = 0.
+    /// P = −(σxx + σyy)/2, the normal stress on the plane of largest in-plane shear stress
+    /// (see the module docs). A point without pressure (P ≤ 0) has I = ∞ (no contacts hold
+    /// it); a point at rest under pressure has I = 0.
     #[inline]
     pub fn inertial_number(&self, l: [f64; 4], stress: &[f64; 4]) -> f64 {
-        let p = -(stress[0] + stress[1] + stress[3]) / 3.0;
+        let p = -0.5 * (stress[0] + stress[1]);
         let rate = Self::shear_rate(l);
         if rate == 0.0 {
             return 0.0;
@@ -55,9 +67,9 @@ impl InertialFriction {
         rate * self.grain_diameter_m / (p / self.grain_density_kg_m3).sqrt()
     }
 
-    /// Friction coefficient tan φ(I) = μ_s + (μ₂ − μ_s) I / (I₀ + I) (Jop, Forterre &
+    /// Friction coefficient μ(I) = μ_s + (μ₂ − μ_s) I / (I₀ + I) (Jop, Forterre &
     /// Pouliquen 2006, eq. 4) for the static friction `mu_s` (–) and inertial number `i`
-    /// (–, may be ∞).
+    /// (–, may be ∞). The caller takes it as sin φ(I) (see the module docs).
     #[inline]
     pub fn friction(&self, mu_s: f64, i: f64) -> f64 {
         if i.is_infinite() {
@@ -95,11 +107,10 @@ mod tests {
     #[test]
     fn inertial_number_and_friction_follow_the_law() {
         let m = beads();
-        // γ̇ = 100 1/s, p = 250 Pa: I = 100 · 1.15e-3 / √(0.1) = 0.3637.
-        let s = [-250.0; 4];
-        let i = m.inertial_number([0.0, 100.0, 0.0, 0.0], &[s[0], s[1], 0.0, s[3]]);
+        // γ̇ = 100 1/s, P = 250 Pa: I = 100 · 1.15e-3 / √(0.1) = 0.3637. σzz does not count.
+        let i = m.inertial_number([0.0, 100.0, 0.0, 0.0], &[-200.0, -300.0, 0.0, -900.0]);
         assert!((i - 0.115 / 0.1f64.sqrt()).abs() < 1e-12, "{i}");
-        let mu_s = 22.2f64.to_radians().tan();
+        let mu_s = 22.2f64.to_radians().sin();
         let mu = m.friction(mu_s, i);
         let expect = mu_s + (m.limit_friction - mu_s) / (0.279 / i + 1.0);
         assert!((mu - expect).abs() < 1e-14);

@@ -144,9 +144,11 @@ impl Material {
             }
             Model::MohrCoulomb(mc) => match (mc.inertial_friction, inertial) {
                 (Some(r), Some(i)) => {
-                    // tan φ(I) from the static tan φ (Jop, Forterre & Pouliquen 2006, eq. 4).
+                    // sin φ(I) = μ(I) from the static sin φ (Jop, Forterre & Pouliquen 2006,
+                    // eq. 4; sine: ψ = 0 plane-strain shear mobilises sin φ, see `inertial`).
                     // Without softening the return takes φ from `k` only.
-                    let (sin_phi, cos_phi) = r.friction(k.sin_phi / k.cos_phi, i).atan().sin_cos();
+                    let sin_phi = r.friction(k.sin_phi, i).min(1.0);
+                    let cos_phi = (1.0 - sin_phi * sin_phi).sqrt();
                     let k = Prepared {
                         sin_phi,
                         cos_phi,
@@ -215,10 +217,11 @@ mod tests {
     fn inertial_friction_mobilises_the_friction_of_the_shear_rate() {
         // Simple shear u_x = γ̇ y of a cohesionless Mohr–Coulomb point with μ(I) (glass beads,
         // Jop et al. 2005: φ₂ = 32.76°, I₀ = 0.279, d = 1.15 mm, ρ_s = 2500 kg/m³). Once it
-        // flows, every step ends on the yield surface of φ(I), with I from the pressure at the
-        // start of the step (hand formula below), and the mobilised angle grows with γ̇.
+        // flows, every step ends on the yield surface of sin φ(I) = μ(I), with I from the
+        // in-plane pressure at the start of the step (hand formula below), and the mobilised
+        // angle grows with γ̇.
         let (phi_s, d, rho_s, i0) = (22.2f64, 1.15e-3, 2500.0, 0.279);
-        let (mu_s, mu_2) = (phi_s.to_radians().tan(), 32.76f64.to_radians().tan());
+        let (mu_s, mu_2) = (phi_s.to_radians().sin(), 32.76f64.to_radians().tan());
         let m = Material {
             density: 1925.0,
             separation_volume_ratio: f64::INFINITY,
@@ -251,11 +254,11 @@ mod tests {
             };
             let mut flowed = 0;
             for _ in 0..400 {
-                let p = -(s[0] + s[1] + s[3]) / 3.0;
+                let p = -0.5 * (s[0] + s[1]);
                 let gamma = l[1];
                 let i = gamma * d / (p / rho_s).sqrt();
                 // Jop, Forterre & Pouliquen (2006), eq. 4.
-                let phi = (mu_s + (mu_2 - mu_s) * i / (i0 + i)).atan().to_degrees();
+                let phi = (mu_s + (mu_2 - mu_s) * i / (i0 + i)).asin().to_degrees();
                 let (_, yielded) = m.update(&k, &mut s, l, dt, &mut ep);
                 if yielded {
                     let f = MohrCoulomb::yield_value(&s, phi, 0.0);
@@ -270,9 +273,9 @@ mod tests {
             assert!(flowed > 100, "rate {rate}: flowed {flowed} of 400 steps");
             mobilised.push(last);
         }
-        // Quasi-static: the static angle (I ~ 1e-7); faster: higher, below φ₂.
+        // Quasi-static: the static angle (I ~ 1e-7); faster: higher, below asin μ₂ (40.0°).
         assert!((mobilised[0] - phi_s).abs() < 1e-3, "{mobilised:?}");
         assert!(mobilised[1] > phi_s + 1.0 && mobilised[2] > mobilised[1] + 1.0);
-        assert!(mobilised[2] < 32.76, "{mobilised:?}");
+        assert!(mobilised[2] < mu_2.asin().to_degrees(), "{mobilised:?}");
     }
 }

@@ -177,12 +177,15 @@ pub struct SofteningSpec {
 }
 
 /// The μ(I) law of a Mohr–Coulomb material (Jop, Forterre & Pouliquen 2006):
-/// tan φ(I) = tan φ_s + (tan φ₂ − tan φ_s) I / (I₀ + I), I = γ̇ d / √(p / ρ_s).
+/// sin φ(I) = sin φ_s + (tan φ₂ − sin φ_s) I / (I₀ + I), I = γ̇ d / √(P / ρ_s), P the
+/// in-plane mean pressure. μ(I) is the shear-to-normal stress ratio of a steady simple shear,
+/// which a ψ = 0 plane-strain Mohr–Coulomb material mobilises as sin φ, so a steady layer
+/// flows on a slope θ where tan θ = μ(I) (Bagnold's profile; see `grainflow::mpm::inertial`).
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct InertialFrictionSpec {
-    /// φ₂ (degrees): the friction angle approached at high inertial number, above
-    /// `friction_deg` (glass beads: 32.76°, Jop et al. 2005).
+    /// φ₂ (degrees): the slope angle of the fastest steady flows, μ₂ = tan φ₂, above
+    /// `friction_deg` and below 45° (glass beads: 32.76°, Jop et al. 2005).
     pub limit_friction_deg: f64,
     /// I₀ (–): the inertial number at which half of the increase is reached (glass beads:
     /// 0.279).

@@ -187,12 +187,14 @@ fn inertial(
     friction_deg: f64,
     density: f64,
 ) -> Result<InertialFriction, SceneError> {
-    if !(r.limit_friction_deg > friction_deg && r.limit_friction_deg < 90.0) {
+    // sin φ(I) = μ(I) reaches tan φ₂, which must stay below 1 (see `mpm::inertial`).
+    if !(r.limit_friction_deg > friction_deg && r.limit_friction_deg < 45.0) {
         return Err(ctx.err(
             "limit_friction_deg",
             n,
             format!(
-                "must lie above the static friction_deg ({friction_deg}) and below 90, got {}",
+                "must lie above the static friction_deg ({friction_deg}) and below 45 \
+                 (μ₂ = tan φ₂ is reached as sin φ), got {}",
                 r.limit_friction_deg
             ),
         ));
