@@ -5,7 +5,7 @@ and grainflow's own DEM sweep.
 Reads runs/mpm-collapse/<name>/summary.json (jobs/mpm-collapse/run.sh): the main sweep is
 a<a> (4 mm cells, GIMP, 2x2 points per cell); the study runs are a<a>-h2mm, -linear, -ppc4,
 -flip, -rough, -mui (mu(I) friction), -apic (APIC transfer), -apic-mui, and -apic-w<W> /
--apic-mui-w<W> (side walls of a quasi-2-D channel W cm apart).
+-apic-mui-w<W> (side walls of a quasi-2-D channel W cm apart), -apic-mui-w10-rough (and a rough floor).
 Prints a table of (L_f - L_i)/L_i and H_f/L_i against the experiments' law (Lajeunesse et
 al. 2005) and the 2-D DEM law, the study's differences, and draws run-out vs a on log axes
 with the DEM sweep of issue 5 (its committed table, jobs/column-collapse/README.md).
@@ -68,7 +68,7 @@ def main():
     args = p.parse_args()
     runs = load(args.runs)
     main_rows, rough_rows, mui_rows, apic_rows, apic_mui_rows = [], [], [], [], []
-    walls_rows, walls_mui_rows = [], []
+    walls_rows, walls_mui_rows, walls_mui_rough_rows = [], [], []
     print(f"{'scene':>17} {'a':>5} {'points':>7} {'runout':>7} {'exp.':>6} {'dev':>7} {'DEM law':>7} {'dev':>7} {'H_f/L_i':>7} {'t/tau_c':>7} {'Mpts/s':>6}")
     for name, s in sorted(runs.items(), key=lambda kv: (kv[1]["results"]["collapse.aspect_ratio"], kv[0])):
         r = s["results"]
@@ -83,7 +83,9 @@ def main():
               f"{r['collapse.final_height']:7.3f} {r['collapse.stop_time']:7.2f} {s['point_steps_per_s']/1e6:6.2f}{thick}")
         if "-" not in name:
             main_rows.append((a, ro))
-        elif name.endswith("-rough") and "h2mm" not in name:
+        elif name.endswith("-apic-mui-w10-rough") and "h2mm" not in name:
+            walls_mui_rough_rows.append((a, ro))
+        elif name.endswith("-rough") and "-w" not in name and "h2mm" not in name:
             rough_rows.append((a, ro))
         elif name.endswith("-apic-w10") and "h2mm" not in name:
             walls_rows.append((a, ro))
@@ -103,7 +105,7 @@ def main():
             continue
         b = base["results"]["collapse.runout"]
         for var in ("h2mm", "linear", "h2mm-linear", "ppc4", "flip", "rough", "mui", "apic",
-                    "h2mm-apic", "apic-mui", "apic-w10", "apic-mui-w10"):
+                    "h2mm-apic", "apic-mui", "apic-w10", "apic-mui-w10", "apic-mui-w10-rough"):
             v = runs.get(f"a{a}-{var}")
             if v:
                 print(f"a = {a}: {var:6s} run-out {v['results']['collapse.runout']:.3f} vs {b:.3f} ({100*(v['results']['collapse.runout']/b-1):+.1f} %)")
@@ -125,12 +127,13 @@ def main():
                 color="tab:blue", label="grainflow DEM (disks)")
     series = [
         (main_rows, "o", "tab:red", "Coulomb base (tan 24.8 deg), FLIP + 5% PIC"),
-        (rough_rows, "^", "tab:orange", "rough (no-slip) base"),
+        (rough_rows, "^", "tab:orange", "rough (no-slip) base, FLIP + 5% PIC"),
         (mui_rows, "v", "tab:green", "Coulomb base, mu(I) friction"),
         (apic_rows, "D", "tab:purple", "Coulomb base, APIC (no PIC damping)"),
         (apic_mui_rows, "d", "tab:brown", "APIC + mu(I)"),
         (walls_rows, "P", "tab:gray", "APIC, side walls 10 cm apart"),
         (walls_mui_rows, "X", "black", "APIC + mu(I), side walls 10 cm apart"),
+        (walls_mui_rough_rows, "*", "tab:cyan", "APIC + mu(I), side walls 10 cm, rough floor"),
     ]
     for rows, marker, color, label in series:
         if rows:

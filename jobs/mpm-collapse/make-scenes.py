@@ -4,7 +4,7 @@
 blended with 5 % PIC), plus the study at a = 2 and 4: 2 mm cells, linear shape functions
 (at both resolutions), 4x4 points per cell, and pure FLIP; every a with a rough (no-slip)
 base instead of the Coulomb one; APIC, mu(I) friction, and the side walls of a quasi-2-D
-channel (5, 10 and 20 cm apart, the beads' wall friction).
+channel (5, 10 and 20 cm apart, the beads' wall friction), also with a rough floor.
 
 Material (seed study Table 4.1; ../shared/reference/README.md): glass beads, friction angle
 22.2 deg from the repose angle, no dilatancy, no cohesion, E = 1.98 MPa, rho = 1925 kg/m^3,
@@ -156,6 +156,15 @@ def main():
         files[f"a{a:g}-h2mm-apic-mui-w10.toml"] = scene(
             a, h=0.002, pic=None, mu_i=True, walls=0.1,
             title_extra=" (2 mm cells, APIC, mu(I) friction, side walls 10 cm apart)")
+    # A rough (no-slip) base under the same flow: the beads' own friction, mu(I), at the floor.
+    for a in [0.5, 1, 2, 4, 8]:
+        files[f"a{a:g}-apic-mui-w10-rough.toml"] = scene(
+            a, pic=None, mu_i=True, walls=0.1, base='{ kind = "fixed" }',
+            title_extra=" (APIC, mu(I) friction, side walls 10 cm apart, rough base)")
+    for a in [0.5, 1, 2]:
+        files[f"a{a:g}-h2mm-apic-mui-w10-rough.toml"] = scene(
+            a, h=0.002, pic=None, mu_i=True, walls=0.1, base='{ kind = "fixed" }',
+            title_extra=" (2 mm cells, APIC, mu(I) friction, side walls 10 cm apart, rough base)")
     for a in [0.5, 1, 2]:
         files[f"a{a:g}-h2mm-apic.toml"] = scene(a, h=0.002, pic=None, title_extra=" (2 mm cells, APIC)")
     for name, text in files.items():

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The MPM column-collapse sweep (a = 0.5, 1, 2, 4, 8 at 4 mm cells, FLIP + 5 % PIC) and the
 # studies: rough base, 2 mm cells, shape functions, points per cell, pure FLIP, APIC, mu(I)
-# friction, side walls; then the table and the plot with the DEM sweep and the published laws.
+# friction, side walls, rough floor; then the table and the plot with the DEM sweep and the published laws.
 # Usage: [THREADS=n] jobs/mpm-collapse/run.sh [ranks] [scene names...]   (all scenes: about
 # two and a half hours on 2 cores; e.g. `run.sh 1 a0.5 a1 a2` for the short columns)
 set -euo pipefail
@@ -25,7 +25,10 @@ if [ ${#names[@]} -eq 0 ]; then
          a0.5-apic-mui-w5 a1-apic-mui-w5 a2-apic-mui-w5 a0.5-apic-mui-w10 a1-apic-mui-w10
          a2-apic-mui-w10 a4-apic-mui-w10 a8-apic-mui-w10 a0.5-apic-mui-w20 a1-apic-mui-w20
          a2-apic-mui-w20 a0.5-h2mm-apic-mui-w10 a1-h2mm-apic-mui-w10 a2-h2mm-apic-mui-w10
-         a0.5-apic-mui-w10-phi23.8 a1-apic-mui-w10-phi23.8 a2-apic-mui-w10-phi23.8)
+         a0.5-apic-mui-w10-phi23.8 a1-apic-mui-w10-phi23.8 a2-apic-mui-w10-phi23.8
+         a0.5-apic-mui-w10-rough a1-apic-mui-w10-rough a2-apic-mui-w10-rough a4-apic-mui-w10-rough
+         a8-apic-mui-w10-rough a0.5-h2mm-apic-mui-w10-rough a1-h2mm-apic-mui-w10-rough
+         a2-h2mm-apic-mui-w10-rough)
 fi
 for name in "${names[@]}"; do
   scene=jobs/mpm-collapse/$name.toml
