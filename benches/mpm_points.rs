@@ -35,16 +35,7 @@ fn column(
     let mat = Material {
         density: 1800.0,
         separation_volume_ratio: 1.15,
-        model: Model::MohrCoulomb(MohrCoulomb {
-            youngs_modulus_pa: 1.0e6,
-            poisson_ratio: 0.3,
-            friction_deg: 30.0,
-            dilation_deg: 0.0,
-            cohesion_pa: 0.0,
-            tension_cutoff_pa: 0.0,
-            softening: None,
-            inertial_friction: None,
-        }),
+        model: Model::MohrCoulomb(MohrCoulomb::cohesionless(1.0e6, 0.3, 30.0)),
     };
     let boundaries = Boundaries {
         left: Side::Roller,

@@ -63,19 +63,13 @@ fn run(theta: f64, t_end: f64) -> Vec<(f64, f64)> {
         density: RHO,
         separation_volume_ratio: 1.15,
         model: Model::MohrCoulomb(MohrCoulomb {
-            youngs_modulus_pa: 5.0e4,
-            poisson_ratio: 0.3,
-            friction_deg: PHI_S_DEG,
-            dilation_deg: 0.0,
-            cohesion_pa: 0.0,
-            tension_cutoff_pa: 0.0,
-            softening: None,
             inertial_friction: Some(InertialFriction {
                 limit_friction: PHI_2_DEG.to_radians().tan(),
                 reference_inertial_number: I0,
                 grain_diameter_m: D,
                 grain_density_kg_m3: RHO_S,
             }),
+            ..MohrCoulomb::cohesionless(5.0e4, 0.3, PHI_S_DEG)
         }),
     };
     let mut pts = Points::default();

@@ -273,16 +273,7 @@ fn layer_velocity(update: VelocityUpdate, times: &[f64]) -> Vec<f64> {
     let m = Material {
         density: rho,
         separation_volume_ratio: 1.15,
-        model: Model::MohrCoulomb(mohr_coulomb::MohrCoulomb {
-            youngs_modulus_pa: 1.98e6,
-            poisson_ratio: 0.3,
-            friction_deg: 22.2,
-            dilation_deg: 0.0,
-            cohesion_pa: 0.0,
-            tension_cutoff_pa: 0.0,
-            softening: None,
-            inertial_friction: None,
-        }),
+        model: Model::MohrCoulomb(mohr_coulomb::MohrCoulomb::cohesionless(1.98e6, 0.3, 22.2)),
     };
     let mut pts = Points::default();
     rect(&mut pts, &spec, [0.2, 0.0], [0.8, depth], 2, rho);

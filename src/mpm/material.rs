@@ -226,19 +226,13 @@ mod tests {
             density: 1925.0,
             separation_volume_ratio: f64::INFINITY,
             model: Model::MohrCoulomb(MohrCoulomb {
-                youngs_modulus_pa: 1.98e6,
-                poisson_ratio: 0.3,
-                friction_deg: phi_s,
-                dilation_deg: 0.0,
-                cohesion_pa: 0.0,
-                tension_cutoff_pa: 0.0,
-                softening: None,
                 inertial_friction: Some(crate::mpm::InertialFriction {
                     limit_friction: mu_2,
                     reference_inertial_number: i0,
                     grain_diameter_m: d,
                     grain_density_kg_m3: rho_s,
                 }),
+                ..MohrCoulomb::cohesionless(1.98e6, 0.3, phi_s)
             }),
         };
         let k = m.prepare();

@@ -293,6 +293,23 @@ fn tension_cutoff(s: [f64; 3], lam: f64, g: f64, st: f64, tol: f64) -> ([f64; 3]
 }
 
 impl MohrCoulomb {
+    /// A cohesionless, non-dilatant material: Young's modulus `youngs_modulus_pa` (Pa),
+    /// Poisson's ratio `poisson_ratio` (–) and friction angle `friction_deg` (deg); ψ = 0,
+    /// c = 0, tension cutoff 0, no softening, no μ(I). Override fields with struct update
+    /// syntax for anything else.
+    pub fn cohesionless(youngs_modulus_pa: f64, poisson_ratio: f64, friction_deg: f64) -> Self {
+        MohrCoulomb {
+            youngs_modulus_pa,
+            poisson_ratio,
+            friction_deg,
+            dilation_deg: 0.0,
+            cohesion_pa: 0.0,
+            tension_cutoff_pa: 0.0,
+            softening: None,
+            inertial_friction: None,
+        }
+    }
+
     /// Friction angle (deg) and cohesion (Pa) at equivalent plastic strain `eps_p` (–): peak
     /// values up to `plastic_strain_start`, residual from `plastic_strain_end`, linear in
     /// between; peak values without softening.
