@@ -132,15 +132,22 @@ fn mpm_on_1_2_and_4_ranks_match_bit_for_bit() {
 }
 
 #[test]
-fn mpm_apic_side_walls_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
+fn mpm_apic_walls_mu_i_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
     let tmp = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(root().join(SCENE)).unwrap();
     // With APIC, so that the points' affine moments must survive migration and the
-    // checkpoint for the runs to agree, and side walls, whose strips cross the slab faces.
+    // checkpoint for the runs to agree, side walls, whose strips cross the slab faces, and
+    // μ(I) friction.
     let with_ckpt = text
         .replace(
             "output_every_s = 0.04",
             "output_every_s = 0.04\ncheckpoint_every = 1200",
+        )
+        .replace(
+            "separation_volume_ratio = 1.15",
+            "separation_volume_ratio = 1.15\ninertial_friction = { limit_friction_deg = 32.76, \
+             reference_inertial_number = 0.279, grain_diameter_m = 1.15e-3, \
+             grain_density_kg_m3 = 2500.0 }",
         )
         .replace(
             "update = \"usf\"",
@@ -150,6 +157,7 @@ fn mpm_apic_side_walls_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
         with_ckpt.contains("apic")
             && with_ckpt.contains("checkpoint_every")
             && with_ckpt.contains("side_walls")
+            && with_ckpt.contains("inertial_friction")
     );
     let scene = tmp.path().join("ckpt.toml");
     std::fs::write(&scene, with_ckpt).unwrap();
