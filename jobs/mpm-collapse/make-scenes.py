@@ -165,6 +165,11 @@ def main():
         files[f"a{a:g}-h2mm-apic-mui-w10-rough.toml"] = scene(
             a, h=0.002, pic=None, mu_i=True, walls=0.1, base='{ kind = "fixed" }',
             title_extra=" (2 mm cells, APIC, mu(I) friction, side walls 10 cm apart, rough base)")
+    # The published GIMP study's resolution: 2 mm cells, 4 x 4 points per cell.
+    for a in [0.5, 1, 2]:
+        files[f"a{a:g}-h2mm-ppc4-apic-mui-w10-rough.toml"] = scene(
+            a, h=0.002, ppc=4, pic=None, mu_i=True, walls=0.1, base='{ kind = "fixed" }',
+            title_extra=" (2 mm cells, 4x4 points, APIC, mu(I), side walls 10 cm apart, rough base)")
     for a in [0.5, 1, 2]:
         files[f"a{a:g}-h2mm-apic.toml"] = scene(a, h=0.002, pic=None, title_extra=" (2 mm cells, APIC)")
     for name, text in files.items():

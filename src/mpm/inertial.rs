@@ -12,13 +12,15 @@
 //! **Which Mohr–Coulomb angle carries μ(I).** A plane-strain Mohr–Coulomb material with
 //! dilation angle ψ = 0 flows in steady simple shear with its principal axes at 45° to the
 //! shear plane (the plastic strain rate is coaxial with the stress and isochoric). The shear
-//! plane is then the plane of largest shear stress, where τ/σ_n = sin φ, not tan φ (Vermeer
-//! & de Borst 1984; Nedderman 1992, §3.6). So the law sets sin φ(I) = μ(I), with the static
-//! μ_s = sin φ of the scene's friction angle, and P is the normal stress on the shear plane,
-//! the in-plane mean −(σxx + σyy)/2 (the out-of-plane σzz of plane strain does not press on
-//! it). Setting tan φ(I) = μ(I) instead, as an earlier version did, lets a layer flow
-//! steadily on a slope of only atan(sin φ(I)): on a 25° incline that is three times Bagnold's
-//! surface speed (`tests/mpm_inertial_flow.rs`).
+//! plane is then the plane of largest shear stress, where τ/σ_n = sin φ, not tan φ (the
+//! ψ = 0 case of Davis 1968's sin φ cos ψ / (1 − sin φ sin ψ); Vermeer & de Borst 1984).
+//! So the law sets sin φ(I) = μ(I), with the static μ_s = sin φ of the scene's friction
+//! angle, and P is the normal stress on the shear plane, the in-plane mean −(σxx + σyy)/2
+//! (the out-of-plane σzz of plane strain does not press on it). Setting tan φ(I) = μ(I)
+//! instead, as an earlier version did, lets a layer flow steadily on a slope of only
+//! atan(sin φ(I)): on a 25° incline its steady I is twice Bagnold's, and a layer started on
+//! Bagnold's profile runs 45 % past its surface speed within 0.3 s
+//! (`tests/mpm_inertial_flow.rs`).
 //!
 //! The law is evaluated explicitly, from the point's stress at the start of the step and
 //! the step's velocity gradient; the return mapping then uses the friction angle of that I.
