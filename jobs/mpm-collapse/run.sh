@@ -28,7 +28,8 @@ if [ ${#names[@]} -eq 0 ]; then
          a0.5-apic-mui-w10-phi23.8 a1-apic-mui-w10-phi23.8 a2-apic-mui-w10-phi23.8
          a0.5-apic-mui-w10-rough a1-apic-mui-w10-rough a2-apic-mui-w10-rough a4-apic-mui-w10-rough
          a8-apic-mui-w10-rough a0.5-h2mm-apic-mui-w10-rough a1-h2mm-apic-mui-w10-rough
-         a2-h2mm-apic-mui-w10-rough)
+         a2-h2mm-apic-mui-w10-rough a0.5-h2mm-ppc4-apic-mui-w10-rough a1-h2mm-ppc4-apic-mui-w10-rough
+         a2-h2mm-ppc4-apic-mui-w10-rough)
 fi
 for name in "${names[@]}"; do
   scene=jobs/mpm-collapse/$name.toml
