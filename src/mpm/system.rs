@@ -91,6 +91,12 @@ impl MpmSetup {
     pub fn wall_coefficient(&self) -> f64 {
         self.side_walls.map_or(0.0, |w| w.coefficient())
     }
+
+    /// Whether side walls brake the flow (present with a positive coefficient): the P2G
+    /// passes then collect the wall force and the node update applies it.
+    pub fn side_walls_act(&self) -> bool {
+        self.wall_coefficient() > 0.0
+    }
 }
 
 /// The CFL limit h / c (s), c the largest wave speed of a stress-carrying point (see
@@ -268,7 +274,7 @@ impl MpmSystem {
         self.exchange_strips(comm);
         let cols = self.node_cols();
         let spec = self.setup.spec;
-        let walls = self.setup.wall_coefficient() > 0.0;
+        let walls = self.setup.side_walls_act();
         strips_to_nodes(&self.strips, &spec, (what, walls), cols, &mut self.nodes);
     }
 
@@ -278,7 +284,7 @@ impl MpmSystem {
             dt: self.setup.dt,
             damping: self.setup.damping,
             min_mass: self.min_mass,
-            side_walls: self.setup.wall_coefficient() > 0.0,
+            side_walls: self.setup.side_walls_act(),
         }
     }
 
