@@ -63,8 +63,9 @@ def main():
     p.add_argument("runs", help="folder with one run folder per scene")
     p.add_argument("--out", default=None, help="PNG to write")
     p.add_argument("--front-min-height", type=float, default=None, metavar="M",
-                   help="also print the run-out to where the deposit's top point centre drops "
-                        "below M metres (needs h5py)")
+                   help="print the run-out to where the deposit's top point centre drops "
+                        "below M metres, recomputed from mpm.h5 (needs h5py); without it the "
+                        "run's own collapse.thick_runout is printed where the scene asked for one")
     args = p.parse_args()
     runs = load(args.runs)
     main_rows, rough_rows, mui_rows, apic_rows, apic_mui_rows = [], [], [], [], []
@@ -75,7 +76,10 @@ def main():
         a, ro = r["collapse.aspect_ratio"], r["collapse.runout"]
         e, d = law(a, EXP), law(a, DEM)
         thick = ""
-        if args.front_min_height:
+        if "collapse.thick_runout" in r and not args.front_min_height:
+            t = r["collapse.thick_runout"]
+            thick = f"  thick front {t:.3f} ({100*(t/e-1):+.0f}% vs exp.)"
+        elif args.front_min_height:
             t = thick_front(os.path.join(args.runs, name), args.front_min_height,
                             r["collapse.initial_length_m"])
             thick = f"  thick front {t:.3f} ({100*(t/e-1):+.0f}% vs exp.)"

@@ -286,6 +286,7 @@ pub fn run_grains(
             GrainAnalysis::ColumnCollapse {
                 wall_x_m,
                 floor_y_m,
+                ..
             } => {
                 let before = pile_shape(&initial.x, &initial.y, &initial.r, *wall_x_m, *floor_y_m);
                 let after = pile_shape(&fin.x, &fin.y, &fin.r, *wall_x_m, *floor_y_m);

@@ -3,7 +3,9 @@
 //! migration) plus output, and at the end the analyses, checks and `summary.json`.
 
 use crate::analysis::checks::{evaluate, CheckOutcome};
-use crate::analysis::collapse::{collapse_results, PileShape, QUANTITIES};
+use crate::analysis::collapse::{
+    collapse_results, thick_front, thick_front_results, PileShape, QUANTITIES, THICK_QUANTITIES,
+};
 use crate::analysis::Results;
 use crate::io::atomic::{ensure_writable_dir, write_atomic};
 use crate::io::mpm_checkpoint::{self, MpmRunState};
@@ -93,47 +95,72 @@ pub struct MpmSummary {
 /// Names of the stages in `summary.json`: the solver's, then output.
 const STAGES: [&str; 7] = ["sort", "p2g", "grid", "stress", "g2p", "migrate", "output"];
 
-/// The deposit of a column collapse: length from the wall to the front and height above
-/// the floor (m). The front is the farthest point edge of the cell columns occupied
-/// without a gap from the wall, so points flung ahead of the mass do not count.
-/// Collective (every rank gets the same shape).
-pub fn deposit_shape(
-    points: &Points,
-    wall_x: f64,
-    floor_y: f64,
-    h: f64,
-    nx: usize,
-    comm: &dyn Comm,
-) -> PileShape {
-    // Per column: farthest edge and highest edge (−∞ when empty); the max over ranks.
-    let mut cols = vec![f64::NEG_INFINITY; 2 * nx];
+/// Per background-cell column of the points on every rank (collective): the farthest point
+/// edge, the highest point edge and the highest point centre (m; −∞ when empty).
+pub fn deposit_columns(points: &Points, h: f64, nx: usize, comm: &dyn Comm) -> Vec<[f64; 3]> {
+    let mut cols = vec![f64::NEG_INFINITY; 3 * nx];
     for i in 0..points.len() {
         let [x, y] = points.pos[i];
         let c = ((x / h).floor().max(0.0) as usize).min(nx - 1);
         let half = points.half0[i];
-        cols[2 * c] = cols[2 * c].max(x + half);
-        cols[2 * c + 1] = cols[2 * c + 1].max(y + half);
+        cols[3 * c] = cols[3 * c].max(x + half);
+        cols[3 * c + 1] = cols[3 * c + 1].max(y + half);
+        cols[3 * c + 2] = cols[3 * c + 2].max(y);
     }
     let all = comm.all_gather_f64(&cols);
-    let mut merged = vec![f64::NEG_INFINITY; 2 * nx];
-    for r in all.chunks_exact(2 * nx) {
-        for (m, v) in merged.iter_mut().zip(r) {
-            *m = m.max(*v);
+    let mut merged = vec![[f64::NEG_INFINITY; 3]; nx];
+    for r in all.chunks_exact(3 * nx) {
+        for (m, v) in merged.iter_mut().zip(r.chunks_exact(3)) {
+            for k in 0..3 {
+                m[k] = m[k].max(v[k]);
+            }
         }
     }
-    let first = ((wall_x / h).floor().max(0.0) as usize).min(nx - 1);
+    merged
+}
+
+/// The deposit of a column collapse from its [`deposit_columns`] (cells `h` wide): length
+/// from the wall to the front and height above the floor (m). The front is the farthest
+/// point edge of the cell columns occupied without a gap from the wall, so points flung
+/// ahead of the mass do not count.
+pub fn deposit_shape(cols: &[[f64; 3]], wall_x: f64, floor_y: f64, h: f64) -> PileShape {
+    let first = wall_column(cols.len(), wall_x, h);
     let (mut reach, mut height) = (wall_x, floor_y);
-    for c in first..nx {
-        if merged[2 * c] == f64::NEG_INFINITY {
+    for c in &cols[first..] {
+        if c[0] == f64::NEG_INFINITY {
             break;
         }
-        reach = reach.max(merged[2 * c]);
-        height = height.max(merged[2 * c + 1]);
+        reach = reach.max(c[0]);
+        height = height.max(c[1]);
     }
     PileShape {
         length_m: reach - wall_x,
         height_m: height - floor_y,
     }
+}
+
+/// The deposit's front where it is at least `min_height` thick (m from the wall): see
+/// [`thick_front`], on the highest point centres above the floor.
+pub fn deposit_thick_front(
+    cols: &[[f64; 3]],
+    wall_x: f64,
+    floor_y: f64,
+    h: f64,
+    min_height: f64,
+) -> f64 {
+    let tops: Vec<f64> = cols.iter().map(|c| c[2] - floor_y).collect();
+    thick_front(
+        &tops,
+        h,
+        wall_column(cols.len(), wall_x, h),
+        wall_x,
+        min_height,
+    )
+}
+
+/// The cell column holding the wall x = `wall_x` (m) among `nx` columns `h` wide.
+fn wall_column(nx: usize, wall_x: f64, h: f64) -> usize {
+    ((wall_x / h).floor().max(0.0) as usize).min(nx - 1)
 }
 
 /// The message of the rank that failed (collective): every rank stops together, but only
@@ -168,12 +195,14 @@ pub fn run_mpm(
         None => None,
     };
     let spec = scene.setup.spec;
-    let collapse = s.analyses.first().map(|a| match a {
-        GrainAnalysis::ColumnCollapse {
+    let (collapse, thick_min_height) = match s.analyses.first() {
+        Some(GrainAnalysis::ColumnCollapse {
             wall_x_m,
             floor_y_m,
-        } => (*wall_x_m, *floor_y_m),
-    });
+            front_min_height_m,
+        }) => (Some((*wall_x_m, *floor_y_m)), *front_min_height_m),
+        None => (None, None),
+    };
     let (points, resume) = match restored {
         Some(r) => (r.points, Some(r.run)),
         None => (scene.points.clone(), None),
@@ -182,7 +211,8 @@ pub fn run_mpm(
     let initial_shape = match (&resume, collapse) {
         (Some(r), _) => r.initial_shape_m,
         (None, Some((wx, fy))) => {
-            let d = deposit_shape(&sys.points, wx, fy, spec.h, spec.nx, comm);
+            let cols = deposit_columns(&sys.points, spec.h, spec.nx, comm);
+            let d = deposit_shape(&cols, wx, fy, spec.h);
             [d.length_m, d.height_m]
         }
         (None, None) => [f64::NAN; 2],
@@ -316,10 +346,20 @@ pub fn run_mpm(
             length_m: initial_shape[0],
             height_m: initial_shape[1],
         };
-        let after = deposit_shape(&sys.points, wx, fy, spec.h, spec.nx, comm);
+        let cols = deposit_columns(&sys.points, spec.h, spec.nx, comm);
+        let after = deposit_shape(&cols, wx, fy, spec.h);
         let values = collapse_results(before, after, g_abs, stop_time.unwrap_or(sys.time));
         for (k, v) in QUANTITIES.iter().zip(values) {
             results.insert(format!("collapse.{k}"), v);
+        }
+        if let Some(min_height) = thick_min_height {
+            let front = deposit_thick_front(&cols, wx, fy, spec.h, min_height);
+            for (k, v) in THICK_QUANTITIES
+                .iter()
+                .zip(thick_front_results(before, front))
+            {
+                results.insert(format!("collapse.{k}"), v);
+            }
         }
     }
     let checks = evaluate(&s.checks, &results);

@@ -122,4 +122,8 @@ fn bad_grains_scenes_name_the_field() {
         &["time step", "exceeds"],
     );
     refused(&format!("{GOOD}[fluid]\n"), &["coupling"]);
+    refused(
+        &format!("{GOOD}[[analyses]]\nkind = \"column-collapse\"\nwall_x_m = 0.0\nfloor_y_m = 0.0\nfront_min_height_m = 0.005\n"),
+        &["front_min_height_m", "MPM"],
+    );
 }

@@ -276,6 +276,15 @@ fn bad_mpm_scenes_name_the_field() {
         "{good}\n[[mpm.bodies]]\nmaterial = \"beads\"\npoints_per_cell = 2\nshape = {{ kind = \"rectangle\", min_m = [0.03, 0.0], max_m = [0.09, 0.03] }}\n"
     );
     refused(&two, &["overlaps body 0"]);
+    let collapse = "[[analyses]]\nkind = \"column-collapse\"\nwall_x_m = 0.0\nfloor_y_m = 0.0\n";
+    refused(
+        &format!("{good}\n{collapse}front_min_height_m = 0.0\n"),
+        &["front_min_height_m", "positive"],
+    );
+    refused(
+        &format!("{good}\n{collapse}[[checks]]\nquantity = \"collapse.thick_runout\"\nmax = 1.0\n"),
+        &["collapse.thick_runout", "collapse.runout"],
+    );
     refused(&format!("{good}\n[fluid]\n"), &["[mpm]", "[fluid]"]);
 }
 
@@ -306,4 +315,16 @@ fn short_column_collapse_with_the_pic_blend_stays_near_the_experiments() {
     );
     let h = r["collapse.final_height"].as_f64().unwrap();
     assert!((h / a - 1.0).abs() < 0.05, "H_f/L_i = {h} vs a = {a}");
+    // The front where the deposit is still 5 mm thick: behind the official front, on a
+    // cell edge (2 mm), and the top of the column (H_f = a L_i) is thicker than 5 mm.
+    let thick = r["collapse.thick_front_m"].as_f64().unwrap();
+    let front = r["collapse.front_m"].as_f64().unwrap();
+    assert!(
+        thick > 0.1 && thick <= front,
+        "thick front {thick} m, front {front} m"
+    );
+    assert!(
+        ((thick / 0.002).round() - thick / 0.002).abs() < 1e-9,
+        "{thick}"
+    );
 }

@@ -26,6 +26,9 @@ PHI = 22.2
 # Loosest over initial packing of the beads (random loose ~0.55 vs ~0.62 poured): points
 # stretched beyond this have lost contact and carry no stress (Dunatunga & Kamrin 2015).
 SEP = 1.15
+# The thick front: where the deposit is still 5 mm (about four bead diameters) thick. The
+# official front follows a tail one or two points thick; this one converges with the cells.
+THICK = 0.005
 
 
 def scene(a, h=0.004, ppc=2, shape="gimp", update="usf", li=0.1, title_extra="", avg=True, pic=0.05,
@@ -92,6 +95,7 @@ stop_below_specific_kinetic_energy_j_kg = 1e-5
 kind = "column-collapse"
 wall_x_m = 0.0
 floor_y_m = 0.0
+front_min_height_m = {THICK}
 ''' + (CHECK if a <= 2 else "")
 
 

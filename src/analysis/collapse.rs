@@ -129,6 +129,36 @@ pub fn collapse_results(
     ]
 }
 
+/// Names of the thick-front results (prefixed `collapse.`), in the order of
+/// [`thick_front_results`].
+pub const THICK_QUANTITIES: [&str; 3] = ["thick_front_m", "thick_runout", "thick_experiment_ratio"];
+
+/// The front of a deposit where it is still `min_height` thick (m from the wall): the far
+/// edge of the last column, contiguous from the wall's column `first`, whose top
+/// `tops[c]` (m above the floor; −∞ when empty) is at least `min_height`. Columns are
+/// `width` wide from x = 0; `wall_x` is the wall (m). Returns 0 when the wall's column
+/// itself is thinner.
+pub fn thick_front(tops: &[f64], width: f64, first: usize, wall_x: f64, min_height: f64) -> f64 {
+    let end = tops[first.min(tops.len())..]
+        .iter()
+        .position(|&t| t < min_height)
+        .map_or(tops.len(), |k| first + k);
+    if end == first {
+        0.0
+    } else {
+        end as f64 * width - wall_x
+    }
+}
+
+/// The thick-front results, in the order of [`THICK_QUANTITIES`], from the column
+/// `before` and the thick front (m from the wall): the front, its run-out
+/// (L_thick − L_i)/L_i and that run-out over the experiments' law.
+pub fn thick_front_results(before: PileShape, thick_front_m: f64) -> [f64; 3] {
+    let (li, a) = (before.length_m, before.height_m / before.length_m);
+    let runout = (thick_front_m - li) / li;
+    [thick_front_m, runout, runout / experiment_law(a)]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -170,5 +200,28 @@ mod tests {
         assert!((r[9] - 3.0 / 2.4).abs() < 1e-12);
         assert!((dem_law(8.0) - 2.7 * 4.0).abs() < 1e-12);
         assert!((experiment_law(8.0) - 1.9 * 4.0).abs() < 1e-12);
+    }
+
+    /// Columns 1 m wide with tops 3, 2, 0.4, 0.6 (a gap in the tail) and an empty one:
+    /// thick at 0.5 m the front is the far edge of the second column; at 0.3 m the tail's
+    /// thin column still counts and the empty one ends it; above 3 m nothing does.
+    #[test]
+    fn thick_front_stops_at_the_first_thin_column() {
+        let tops = [3.0, 2.0, 0.4, 0.6, f64::NEG_INFINITY];
+        assert_eq!(thick_front(&tops, 1.0, 0, 0.0, 0.5), 2.0);
+        assert_eq!(thick_front(&tops, 1.0, 0, 0.0, 0.3), 4.0);
+        assert_eq!(thick_front(&tops, 1.0, 0, 0.0, 3.5), 0.0);
+        assert_eq!(
+            thick_front(&tops, 1.0, 1, 0.5, 0.5),
+            1.5,
+            "measured from a wall inside the first column"
+        );
+        let before = PileShape {
+            length_m: 1.0,
+            height_m: 1.0,
+        };
+        let r = thick_front_results(before, 2.0);
+        assert_eq!(r[1], 1.0);
+        assert!((r[2] - 1.0 / 1.2).abs() < 1e-12);
     }
 }

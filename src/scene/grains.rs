@@ -266,5 +266,13 @@ pub enum GrainAnalysis {
         wall_x_m: f64,
         /// The floor (m).
         floor_y_m: f64,
+        /// MPM scenes only: also measure the front where the deposit is still this thick
+        /// (m, > 0; a few grain diameters): the farthest cell column, contiguous from the
+        /// wall, whose highest point centre stands at least this high above the floor.
+        /// Gives `collapse.thick_front_m`, `collapse.thick_runout` and
+        /// `collapse.thick_experiment_ratio`. Unlike the front, it does not follow a tail
+        /// one or two points thick, so it converges with the cells.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        front_min_height_m: Option<f64>,
     },
 }

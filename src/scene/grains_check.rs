@@ -196,6 +196,18 @@ fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
     if s.analyses.len() > 1 {
         return Err(ctx.err("kind", 0, "at most one column-collapse analysis per scene"));
     }
+    if let Some(GrainAnalysis::ColumnCollapse {
+        front_min_height_m: Some(_),
+        ..
+    }) = s.analyses.first()
+    {
+        return Err(ctx.err(
+            "front_min_height_m",
+            0,
+            "the thick front is measured on MPM deposits only (a grain deposit's front is \
+             already grain by grain); remove front_min_height_m",
+        ));
+    }
     validate_checks(&s.checks, ctx)?;
     let names = grain_result_names(s);
     for (n, c) in s.checks.iter().enumerate() {

@@ -1,5 +1,6 @@
 //! Validation of MPM scenes and their conversion to solver parameters and points.
 
+use super::grains::GrainAnalysis;
 use super::grains_check::{non_negative, rectangle};
 use super::mpm::*;
 use super::mpm_material_check::{in_range, material};
@@ -31,9 +32,17 @@ pub struct ValidMpmScene {
 /// Names of the results an MPM scene produces (what checks may refer to).
 pub fn mpm_result_names(s: &MpmScene) -> Vec<String> {
     let mut names = Vec::new();
-    if !s.analyses.is_empty() {
+    for a in &s.analyses {
+        let GrainAnalysis::ColumnCollapse {
+            front_min_height_m, ..
+        } = a;
         for q in crate::analysis::collapse::QUANTITIES {
             names.push(format!("collapse.{q}"));
+        }
+        if front_min_height_m.is_some() {
+            for q in crate::analysis::collapse::THICK_QUANTITIES {
+                names.push(format!("collapse.{q}"));
+            }
         }
     }
     names
@@ -269,6 +278,19 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
     )?;
     if s.analyses.len() > 1 {
         return Err(ctx.err("kind", 0, "at most one column-collapse analysis per scene"));
+    }
+    for a in &s.analyses {
+        let GrainAnalysis::ColumnCollapse {
+            front_min_height_m, ..
+        } = a;
+        if let Some(v) = *front_min_height_m {
+            positive(
+                ctx,
+                "front_min_height_m",
+                v,
+                "the deposit thickness that marks the thick front",
+            )?;
+        }
     }
     validate_checks(&s.checks, ctx)?;
     let names = mpm_result_names(s);
