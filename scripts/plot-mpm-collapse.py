@@ -5,7 +5,8 @@ and grainflow's own DEM sweep.
 Reads runs/mpm-collapse/<name>/summary.json (jobs/mpm-collapse/run.sh): the main sweep is
 a<a> (4 mm cells, GIMP, 2x2 points per cell); the study runs are a<a>-h2mm, -linear, -ppc4,
 -flip, -rough, -mui (mu(I) friction), -apic (APIC transfer), -apic-mui, and -apic-w<W> /
--apic-mui-w<W> (side walls of a quasi-2-D channel W cm apart), -apic-mui-w10-rough (and a rough floor).
+-apic-mui-w<W> (side walls of a quasi-2-D channel W cm apart), -apic-mui-w10-rough (and a rough floor),
+-h2mm-ppc4-rough (the published resolution, FLIP + 5 % PIC, rough floor).
 Prints a table of (L_f - L_i)/L_i and H_f/L_i against the experiments' law (Lajeunesse et
 al. 2005) and the 2-D DEM law, the study's differences, and draws run-out vs a on log axes
 with the DEM sweep of issue 5 (its committed table, jobs/column-collapse/README.md).
@@ -69,7 +70,7 @@ def main():
     args = p.parse_args()
     runs = load(args.runs)
     main_rows, rough_rows, mui_rows, apic_rows, apic_mui_rows = [], [], [], [], []
-    walls_rows, walls_mui_rows, walls_mui_rough_rows = [], [], []
+    walls_rows, walls_mui_rows, walls_mui_rough_rows, published_rows = [], [], [], []
     print(f"{'scene':>17} {'a':>5} {'points':>7} {'runout':>7} {'exp.':>6} {'dev':>7} {'DEM law':>7} {'dev':>7} {'H_f/L_i':>7} {'t/tau_c':>7} {'Mpts/s':>6}")
     for name, s in sorted(runs.items(), key=lambda kv: (kv[1]["results"]["collapse.aspect_ratio"], kv[0])):
         r = s["results"]
@@ -87,6 +88,8 @@ def main():
               f"{r['collapse.final_height']:7.3f} {r['collapse.stop_time']:7.2f} {s['point_steps_per_s']/1e6:6.2f}{thick}")
         if "-" not in name:
             main_rows.append((a, ro))
+        elif name.endswith("-h2mm-ppc4-rough"):
+            published_rows.append((a, ro))
         elif name.endswith("-apic-mui-w10-rough") and "h2mm" not in name:
             walls_mui_rough_rows.append((a, ro))
         elif name.endswith("-rough") and "-w" not in name and "h2mm" not in name:
@@ -138,6 +141,7 @@ def main():
         (walls_rows, "P", "tab:gray", "APIC, side walls 10 cm apart"),
         (walls_mui_rows, "X", "black", "APIC + mu(I), side walls 10 cm apart"),
         (walls_mui_rough_rows, "*", "tab:cyan", "APIC + mu(I), side walls 10 cm, rough floor"),
+        (published_rows, "h", "tab:olive", "2 mm, 4x4 points, FLIP + 5% PIC, rough floor"),
     ]
     for rows, marker, color, label in series:
         if rows:

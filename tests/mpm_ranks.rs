@@ -102,6 +102,11 @@ fn mpm_on_1_2_and_4_ranks_match_bit_for_bit() {
         );
     }
     let s1 = summary(&dirs[0]);
+    assert!(
+        s1["results"]["collapse.thick_front_m"].as_f64().unwrap() > 0.06,
+        "thick front: {}",
+        s1["results"]
+    );
     for (r, d) in [2, 4].iter().zip(&dirs[1..]) {
         assert_same(&one, &snapshots(d), &format!("{r} ranks"));
         let s = summary(d);
@@ -117,6 +122,8 @@ fn mpm_on_1_2_and_4_ranks_match_bit_for_bit() {
             "{r} ranks: kinetic energy"
         );
         assert_eq!(s["momentum"], s1["momentum"], "{r} ranks: momentum");
+        // The deposit analysis gathers its columns from every rank.
+        assert_eq!(s["results"], s1["results"], "{r} ranks: collapse results");
         if *r == 4 {
             assert!(
                 s["rebalances"].as_u64().unwrap() > 0,

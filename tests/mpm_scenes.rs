@@ -276,16 +276,17 @@ fn bad_mpm_scenes_name_the_field() {
         "{good}\n[[mpm.bodies]]\nmaterial = \"beads\"\npoints_per_cell = 2\nshape = {{ kind = \"rectangle\", min_m = [0.03, 0.0], max_m = [0.09, 0.03] }}\n"
     );
     refused(&two, &["overlaps body 0"]);
-    let collapse = "[[analyses]]\nkind = \"column-collapse\"\nwall_x_m = 0.0\nfloor_y_m = 0.0\n";
     refused(
-        &format!("{good}\n{collapse}front_min_height_m = 0.0\n"),
+        &bad("front_min_height_m = 0.005", "front_min_height_m = 0.0"),
         &["front_min_height_m", "positive"],
     );
     refused(
-        &format!("{good}\n{collapse}[[checks]]\nquantity = \"collapse.thick_runout\"\nmax = 1.0\n"),
+        &format!(
+            "{}\n[[checks]]\nquantity = \"collapse.thick_runout\"\nmax = 1.0\n",
+            bad("front_min_height_m = 0.005\n", "")
+        ),
         &["collapse.thick_runout", "collapse.runout"],
     );
-    refused(&format!("{good}\n[fluid]\n"), &["[mpm]", "[fluid]"]);
 }
 
 /// The shortest column at 2 mm cells (a = 0.5, 5000 points, 50 cells across), FLIP + 5 % PIC:

@@ -174,6 +174,12 @@ def main():
         files[f"a{a:g}-h2mm-ppc4-apic-mui-w10-rough.toml"] = scene(
             a, h=0.002, ppc=4, pic=None, mu_i=True, walls=0.1, base='{ kind = "fixed" }',
             title_extra=" (2 mm cells, 4x4 points, APIC, mu(I), side walls 10 cm apart, rough base)")
+    # ... and with the update of the earlier sweep (FLIP + 5 % PIC) on a rough floor: the
+    # configuration closest to the published study that matched the experiments below a = 2.7.
+    for a in [0.5, 1, 2, 4]:
+        files[f"a{a:g}-h2mm-ppc4-rough.toml"] = scene(
+            a, h=0.002, ppc=4, base='{ kind = "fixed" }',
+            title_extra=" (2 mm cells, 4x4 points, FLIP + 5 % PIC, rough base)")
     for a in [0.5, 1, 2]:
         files[f"a{a:g}-h2mm-apic.toml"] = scene(a, h=0.002, pic=None, title_extra=" (2 mm cells, APIC)")
     for name, text in files.items():

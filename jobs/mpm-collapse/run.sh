@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The MPM column-collapse sweep (a = 0.5, 1, 2, 4, 8 at 4 mm cells, FLIP + 5 % PIC) and the
 # studies: rough base, 2 mm cells, shape functions, points per cell, pure FLIP, APIC, mu(I)
-# friction, side walls, rough floor; then the table and the plot with the DEM sweep and the published laws.
+# friction, side walls, rough floor, the published resolution; then the table and the plot with the DEM sweep and the published laws.
 # Usage: [THREADS=n] jobs/mpm-collapse/run.sh [ranks] [scene names...]   (all scenes: about
-# two and a half hours on 2 cores; e.g. `run.sh 1 a0.5 a1 a2` for the short columns)
+# three and a half hours on 2 cores; e.g. `run.sh 1 a0.5 a1 a2` for the short columns)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 ranks=${1:-1}
@@ -29,7 +29,8 @@ if [ ${#names[@]} -eq 0 ]; then
          a0.5-apic-mui-w10-rough a1-apic-mui-w10-rough a2-apic-mui-w10-rough a4-apic-mui-w10-rough
          a8-apic-mui-w10-rough a0.5-h2mm-apic-mui-w10-rough a1-h2mm-apic-mui-w10-rough
          a2-h2mm-apic-mui-w10-rough a0.5-h2mm-ppc4-apic-mui-w10-rough a1-h2mm-ppc4-apic-mui-w10-rough
-         a2-h2mm-ppc4-apic-mui-w10-rough)
+         a2-h2mm-ppc4-apic-mui-w10-rough
+         a0.5-h2mm-ppc4-rough a1-h2mm-ppc4-rough a2-h2mm-ppc4-rough a4-h2mm-ppc4-rough)
 fi
 for name in "${names[@]}"; do
   scene=jobs/mpm-collapse/$name.toml
