@@ -289,33 +289,41 @@ fn bad_mpm_scenes_name_the_field() {
     );
 }
 
-/// The shortest column at 2 mm cells (a = 0.5, 5000 points, 50 cells across), FLIP + 5 % PIC:
-/// the whole collapse pipeline (scene, run, deposit analysis, checks) end to end. Run-out
-/// within 20 % of the experiments' law 1.2 a (Lajeunesse et al. 2005; the scene's own check
-/// says the same) and the top of the column does not move (H_f/L_i = a). A regression check
-/// of this configuration, not a validation of the material: part of the agreement is the PIC
-/// blend's numerical damping (APIC runs out 0.94–1.23 here; jobs/mpm-collapse/README.md).
-#[test]
-fn short_column_collapse_with_the_pic_blend_stays_near_the_experiments() {
+/// Runs a committed collapse scene of aspect ratio `a`: the run and its checks pass, the
+/// column is the scene's, and the run-out lies within 20 % of the experiments' law 1.2 a
+/// (Lajeunesse et al. 2005; the scene's own check says the same). Returns the results.
+fn collapse_near_the_experiments(scene: &str, a_scene: f64) -> serde_json::Value {
     let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("a0.5");
-    let (o, s) = run(&root().join("jobs/mpm-collapse/a0.5-h2mm.toml"), &out);
+    let out = tmp.path().join("run");
+    let (o, s) = run(&root().join(scene), &out);
     assert!(
         o.status.success(),
         "checks failed or the run broke: {:?}",
         o.status
     );
-    let r = &s["results"];
+    let r = s["results"].clone();
     let a = r["collapse.aspect_ratio"].as_f64().unwrap();
-    assert!((a - 0.5).abs() < 0.02, "aspect ratio {a}");
+    assert!((a - a_scene).abs() < 0.02, "aspect ratio {a}");
     let runout = r["collapse.runout"].as_f64().unwrap();
     assert!(
         (runout / (1.2 * a) - 1.0).abs() < 0.2,
         "run-out {runout} vs 1.2 a = {}",
         1.2 * a
     );
+    r
+}
+
+/// The shortest column at 2 mm cells (a = 0.5, 5000 points, 50 cells across), FLIP + 5 % PIC:
+/// the whole collapse pipeline (scene, run, deposit analysis, checks) end to end. Run-out
+/// within 20 % of the experiments' law and the top of the column does not move (H_f/L_i =
+/// a). A regression check of this configuration, not a validation of the material: part of
+/// the agreement is the PIC blend's numerical damping (APIC runs out 0.94–1.23 here;
+/// jobs/mpm-collapse/README.md).
+#[test]
+fn short_column_collapse_with_the_pic_blend_stays_near_the_experiments() {
+    let r = collapse_near_the_experiments("jobs/mpm-collapse/a0.5-h2mm.toml", 0.5);
     let h = r["collapse.final_height"].as_f64().unwrap();
-    assert!((h / a - 1.0).abs() < 0.05, "H_f/L_i = {h} vs a = {a}");
+    assert!((h / 0.5 - 1.0).abs() < 0.05, "H_f/L_i = {h} vs a = 0.5");
     // The front where the deposit is still 5 mm thick: behind the official front, on a
     // cell edge (2 mm), and the top of the column (H_f = a L_i) is thicker than 5 mm.
     let thick = r["collapse.thick_front_m"].as_f64().unwrap();
@@ -332,33 +340,13 @@ fn short_column_collapse_with_the_pic_blend_stays_near_the_experiments() {
 
 /// The published GIMP study's configuration (2 mm cells, 4 × 4 points per cell; FLIP + 5 %
 /// PIC and a rough floor, which it does not state) at a = 1 (40 000 points): run-out within
-/// 20 % of the experiments' law 1.2 a (Lajeunesse et al. 2005), as that study reports below
-/// a ≈ 2.7 (../shared/reference/README.md). Measured 1.279 (+6.6 %). Like the test above, a
+/// 20 % of the experiments' law, as that study reports below a ≈ 2.7
+/// (../shared/reference/README.md). Measured 1.279 (+6.6 %). Like the test above, a
 /// regression check of a numerically damped update: APIC with μ(I), side walls and the same
 /// floor runs out 1.948 here (jobs/mpm-collapse/README.md).
 #[test]
 fn published_configuration_matches_the_experiments_at_a_1() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("a1");
-    let (o, s) = run(
-        &root().join("jobs/mpm-collapse/a1-h2mm-ppc4-rough.toml"),
-        &out,
-    );
-    assert!(
-        o.status.success(),
-        "checks failed or the run broke: {:?}",
-        o.status
-    );
-    let r = &s["results"];
-    let a = r["collapse.aspect_ratio"].as_f64().unwrap();
-    assert!((a - 1.0).abs() < 0.02, "aspect ratio {a}");
-    assert_eq!(s["points"], 40_000);
-    let runout = r["collapse.runout"].as_f64().unwrap();
-    assert!(
-        (runout / (1.2 * a) - 1.0).abs() < 0.2,
-        "run-out {runout} vs 1.2 a = {}",
-        1.2 * a
-    );
+    let r = collapse_near_the_experiments("jobs/mpm-collapse/a1-h2mm-ppc4-rough.toml", 1.0);
     // No thin tail under the PIC blend: the 5 mm-thick front is within a cell of the front.
     let gap =
         r["collapse.front_m"].as_f64().unwrap() - r["collapse.thick_front_m"].as_f64().unwrap();
