@@ -51,12 +51,7 @@ fn run(theta: f64, t_end: f64) -> Vec<(f64, f64)> {
         ny: 16,
         h: 0.001,
     };
-    let b = Boundaries {
-        left: Side::Open,
-        right: Side::Open,
-        bottom: Side::Fixed,
-        top: Side::Open,
-    };
+    let b = Boundaries::floor(Side::Fixed);
     // A soft skeleton (c = 5.9 m/s) keeps the time step long; the steady flow carries no
     // elastic strain rate, so E does not enter Bagnold's profile.
     let m = Material {

@@ -27,12 +27,7 @@ fn block(spec: &GridSpec, min: [f64; 2], max: [f64; 2], rho: f64) -> Points {
     points
 }
 
-const OPEN: Boundaries = Boundaries {
-    left: Side::Open,
-    right: Side::Open,
-    bottom: Side::Open,
-    top: Side::Open,
-};
+const OPEN: Boundaries = Boundaries::floor(Side::Open);
 
 /// A free elastic block (no gravity) pressed against both walls by a uniform out-of-plane
 /// stress σ_zz = −p₀, launched at v₀ along a diagonal. Its in-plane stresses are zero, so
@@ -151,12 +146,7 @@ fn column_between_frictional_walls_follows_janssen() {
         ny: 24,
         h: 0.05,
     };
-    let b = Boundaries {
-        left: Side::Open,
-        right: Side::Open,
-        bottom: Side::Roller,
-        top: Side::Open,
-    };
+    let b = Boundaries::floor(Side::Roller);
     let pts = block(&spec, [0.1, 0.0], [0.2, height], rho);
     let y0: Vec<f64> = pts.pos.iter().map(|p| p[1]).collect();
     let walls = SideWalls {

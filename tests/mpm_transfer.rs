@@ -7,12 +7,7 @@ use grainflow::mpm::*;
 use grainflow::mpm::{shape, transfer};
 
 fn setup(shape: ShapeKind, update: VelocityUpdate, spec: GridSpec, e: f64) -> MpmSetup {
-    let open = Boundaries {
-        left: Side::Open,
-        right: Side::Open,
-        bottom: Side::Open,
-        top: Side::Open,
-    };
+    let open = Boundaries::floor(Side::Open);
     let m = Material::linear_elastic(e, 0.3, 1000.0);
     MpmSetup {
         velocity_update: update,

@@ -200,12 +200,7 @@ fn block_slides_on_frictional_incline_within_3_percent() {
             ny: 8,
             h: 0.02,
         };
-        let b = Boundaries {
-            left: Side::Open,
-            right: Side::Open,
-            bottom: Side::Frictional { friction: mu },
-            top: Side::Open,
-        };
+        let b = Boundaries::floor(Side::Frictional { friction: mu });
         let mut pts = Points::default();
         rect(&mut pts, &spec, [0.04, 0.0], [0.24, 0.1], 2, rho);
         // Start from the equilibrium normal stress to avoid a drop transient.
@@ -264,12 +259,7 @@ fn layer_velocity(update: VelocityUpdate, times: &[f64]) -> Vec<f64> {
         ny: 10,
         h: 0.004,
     };
-    let b = Boundaries {
-        left: Side::Open,
-        right: Side::Open,
-        bottom: Side::Fixed,
-        top: Side::Open,
-    };
+    let b = Boundaries::floor(Side::Fixed);
     let m = Material {
         density: rho,
         separation_volume_ratio: 1.15,

@@ -73,6 +73,19 @@ pub struct Boundaries {
     pub top: Side,
 }
 
+impl Boundaries {
+    /// Open on the left, right and top, with `bottom` as the floor: a layer or block on a
+    /// base, free everywhere else.
+    pub const fn floor(bottom: Side) -> Self {
+        Self {
+            left: Side::Open,
+            right: Side::Open,
+            bottom,
+            top: Side::Open,
+        }
+    }
+}
+
 /// Apply `side` to a velocity whose wall normal (pointing into the material) is axis
 /// `axis` (0 = x, 1 = y) with sign `into` (+1 for the left/bottom side). `v` is the new
 /// nodal velocity (m/s).
