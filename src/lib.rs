@@ -9,6 +9,7 @@
 //! and writes snapshots, pictures, probe series and a `summary.json` ([`io`]).
 
 pub mod analysis;
+pub mod coupling;
 pub mod dem;
 pub mod gpu;
 pub mod io;

@@ -395,6 +395,30 @@ fn print_check(s: &scene::ValidScene) {
         bytes(8.0) / 1048576.0,
         bytes(4.0) / 1048576.0
     );
+    match grainflow::coupling::plan(s) {
+        Ok(Some(p)) => {
+            println!(
+                "  coupling         {} with {} DEM sub-steps per fluid step (Δt_D = {:.4e} s){}",
+                p.scheme.name(),
+                p.substeps,
+                p.dem_time_step_s,
+                if p.force_averaging {
+                    ", force averaged over two steps"
+                } else {
+                    ""
+                }
+            );
+            let (a, b) = p.cells_per_diameter;
+            println!(
+                "  grains           {}; {a:.1}–{b:.1} cells per diameter",
+                p.grains
+                    .map(|n| n.to_string())
+                    .unwrap_or_else(|| "packed at run time".into())
+            );
+        }
+        Ok(None) => {}
+        Err(e) => println!("  coupling: {e}"),
+    }
     for w in &s.warnings {
         println!("  warning: {w}");
     }

@@ -296,7 +296,31 @@ fn run_typed<T: Real + hdf5::H5Type>(
         }
         .into());
     }
+    if scene.scene.grains.is_some()
+        && (opts.restart.is_some()
+            || run.checkpoint_every > 0
+            || run.checkpoint_at_end
+            || run.checkpoint_minutes > 0.0)
+    {
+        return Err(SceneError::Invalid {
+            path: scene.path.clone(),
+            line: None,
+            key: "checkpoint_every".into(),
+            message: "checkpoints of coupled fluid–grain runs are not written yet (the grains \
+                      would be lost): remove checkpoint_every, checkpoint_at_end, \
+                      checkpoint_minutes and --restart"
+                .into(),
+        }
+        .into());
+    }
     let mut sim = Simulation::<T>::new(scene, comm, backend, storage)?;
+    let momentum = |sim: &Simulation<T>| {
+        sim.grains.as_ref().map(|c| {
+            let (f, g) = c.momentum(sim.fluid.lattice());
+            [f, g]
+        })
+    };
+    let momentum_initial = momentum(&sim);
     let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
     let checkpoint_path = opts.out_dir.join("checkpoint.h5");
     let mut totals_initial = None;
@@ -407,7 +431,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         let due = (run.checkpoint_every > 0 && step % run.checkpoint_every == 0)
             || agreed != 0
             || (step == n && run.checkpoint_at_end);
-        if due {
+        if due && sim.grains.is_none() {
             if let Err(e) = sim.check(comm) {
                 error = Some(e.to_string());
                 break;
@@ -442,6 +466,15 @@ fn run_typed<T: Real + hdf5::H5Type>(
             steps,
             series: &sim.series,
             totals: (totals_initial, totals_final),
+            momentum: momentum_initial.zip(momentum(&sim)),
+            grain_radius: sim
+                .grains
+                .as_ref()
+                .map(|c| {
+                    let g = c.grains();
+                    g.id.iter().copied().zip(g.r.iter().copied()).collect()
+                })
+                .unwrap_or_default(),
         })?
     } else if error.is_none() && !interrupted {
         let mut r = Results::new();
@@ -454,6 +487,11 @@ fn run_typed<T: Real + hdf5::H5Type>(
     } else {
         Results::new()
     };
+    let mut results = results;
+    if let Some(c) = &sim.grains {
+        results.insert("coupling.substeps".into(), c.substeps() as f64);
+        results.insert("coupling.grains".into(), c.grains().len() as f64);
+    }
     let checks = evaluate(&scene.scene.checks, &results);
     let status = match (&error, interrupted, checks.iter().all(|c| c.passed)) {
         (Some(_), _, _) => Status::Unstable,
@@ -560,6 +598,8 @@ struct Output {
     /// Bytes of field data in the file (global), and seconds this rank spent writing them.
     bytes: u64,
     write_s: f64,
+    /// `grains.h5` + `grains.xdmf` of a coupled run.
+    grains: Option<crate::io::grains_out::GrainWriter>,
 }
 
 impl Output {
@@ -583,6 +623,14 @@ impl Output {
             root: comm.is_root(),
             bytes: 0,
             write_s: 0.0,
+            grains: match scene.scene.grains {
+                Some(_) => Some(crate::io::grains_out::GrainWriter::open(
+                    dir,
+                    comm,
+                    resume_after,
+                )?),
+                None => None,
+            },
         })
     }
 
@@ -624,6 +672,9 @@ impl Output {
         }
         let t = Instant::now();
         self.h5.write(step, u.time_si(step), &data)?;
+        if let (Some(w), Some(c)) = (&mut self.grains, &sim.grains) {
+            w.write(&c.dem, comm)?;
+        }
         self.write_s += t.elapsed().as_secs_f64();
         let cells = (sim.partition.columns() * f.ny) as u64;
         self.bytes += data
@@ -637,8 +688,23 @@ impl Output {
             slab.ux = speed_local;
             slab.uy = vorticity;
             let g = sim.gather_fields(comm, &slab);
+            let grain_cells = sim.grains.as_ref().map(|c| {
+                // Grains drawn as solid where they cover at least half a cell (one rank).
+                let lat = sim.fluid.lattice();
+                let mut frac = vec![0.0; lat.plane()];
+                c.coupler().solid_fraction(&mut frac);
+                let (nx, ny) = (lat.nx(), lat.ny());
+                (0..ny * nx)
+                    .map(|k| frac[lat.padded_index((k % nx) as isize, (k / nx) as isize)] >= 0.5)
+                    .collect::<Vec<bool>>()
+            });
             if self.root {
-                let solid: Vec<bool> = g.fluid.iter().map(|b| !b).collect();
+                let mut solid: Vec<bool> = g.fluid.iter().map(|b| !b).collect();
+                if let Some(cells) = &grain_cells {
+                    for (s, &g) in solid.iter_mut().zip(cells) {
+                        *s |= g;
+                    }
+                }
                 let (speed, vort) = (&g.ux, &g.uy);
                 let pics = self.dir.join("pictures");
                 let vmax = speed.iter().copied().fold(0.0, f64::max);

@@ -19,7 +19,7 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-mod sample;
+pub(crate) mod sample;
 
 pub use sample::gather_grains;
 use sample::{bounds_for, global_state, prepare, start};

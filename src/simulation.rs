@@ -2,6 +2,7 @@
 //! list of named, timed stages. A fluid-only scene holds only a lattice (this rank's slab).
 
 use crate::analysis::flows::{taylor_green_pressure, taylor_green_velocity};
+use crate::coupling::{CouplingError, LbmDem};
 use crate::gpu::{GpuContext, GpuFluid};
 use crate::io::probes::Series;
 use crate::lbm::fields::{Fields, Totals};
@@ -16,9 +17,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Names of the stages of one step, in execution order.
-pub const STAGES: [&str; 6] = [
+pub const STAGES: [&str; 8] = [
     "collide-stream",
     "halo-wait",
+    "coupling",
+    "dem",
     "boundaries",
     "probes",
     "output",
@@ -30,14 +33,18 @@ pub mod stage {
     pub const COLLIDE_STREAM: usize = 0;
     /// Exposed waiting for halos.
     pub const HALO_WAIT: usize = 1;
+    /// Fluid–grain exchange at the grains' surfaces, and the re-mapping after they move.
+    pub const COUPLING: usize = 2;
+    /// DEM sub-steps of a coupled run.
+    pub const DEM: usize = 3;
     /// Halo refill of local faces, inlet ramps.
-    pub const BOUNDARIES: usize = 2;
+    pub const BOUNDARIES: usize = 4;
     /// Probe sampling and reduction.
-    pub const PROBES: usize = 3;
+    pub const PROBES: usize = 5;
     /// Snapshots (fields, HDF5, pictures).
-    pub const OUTPUT: usize = 4;
+    pub const OUTPUT: usize = 6;
     /// Checkpoint writing.
-    pub const CHECKPOINT: usize = 5;
+    pub const CHECKPOINT: usize = 7;
 }
 
 /// Accumulated wall time per stage.
@@ -62,6 +69,19 @@ enum ProbeTarget {
     /// Global cell (x, y).
     Cell(usize, usize),
     Solid(u16),
+    /// A grain of a coupled run, by id.
+    Grain(u64),
+}
+
+/// Why a step could not be taken.
+#[derive(Debug, thiserror::Error)]
+pub enum StepFailure {
+    /// The fluid went unstable.
+    #[error(transparent)]
+    Fluid(#[from] StepError),
+    /// The coupling stopped (unstable cell at a grain, grain out of the domain).
+    #[error(transparent)]
+    Coupling(#[from] CouplingError),
 }
 
 /// The fluid state of this rank's slab plus the run's probes.
@@ -83,6 +103,8 @@ pub struct Simulation<T: Real> {
     field_halo: SlabHalo,
     /// A point probe sits on a column next to a rank face, so sampling reads the halo.
     probe_on_rank_face: bool,
+    /// Grains coupled to the fluid, when the scene has them.
+    pub grains: Option<LbmDem>,
 }
 
 impl<T: Real> Simulation<T> {
@@ -126,6 +148,21 @@ impl<T: Real> Simulation<T> {
                     let id = solid_id_of(&built.setup, obstacle).expect("validated");
                     targets.push(ProbeTarget::Solid(id));
                     series.push(Series::new(name, vec!["fx_n_per_m", "fy_n_per_m"]));
+                }
+                Probe::Grain { name, id } => {
+                    targets.push(ProbeTarget::Grain(*id));
+                    series.push(Series::new(
+                        name,
+                        vec![
+                            "x_m",
+                            "y_m",
+                            "vx_m_s",
+                            "vy_m_s",
+                            "omega_rad_s",
+                            "fx_n_per_m",
+                            "fy_n_per_m",
+                        ],
+                    ));
                 }
             }
         }
@@ -173,6 +210,46 @@ impl<T: Real> Simulation<T> {
             }
         }
         lattice.update_boundaries();
+        let grains = if scene.scene.grains.is_some() {
+            if backend == Backend::Gpu {
+                return Err(invalid(
+                    "backend",
+                    "coupled fluid–grain runs use the CPU backend for now: run with \
+                     `--backend cpu` (or drop `backend = \"gpu\"` from [run])"
+                        .into(),
+                )
+                .into());
+            }
+            if comm.size() > 1 {
+                return Err(invalid(
+                    "grains",
+                    "coupled fluid–grain runs use one rank for now (the grains' slab \
+                     decomposition is not coupled yet): run without mpirun and give the cores \
+                     to rayon with --threads"
+                        .into(),
+                )
+                .into());
+            }
+            let c = LbmDem::new(scene, &mut lattice, comm)?;
+            for t in &targets {
+                if let ProbeTarget::Grain(id) = t {
+                    if !c.grains().id.contains(id) {
+                        return Err(invalid(
+                            "id",
+                            format!(
+                                "grain probe names grain {id}, but the sample has grains 0..{}",
+                                c.grains().len()
+                            ),
+                        )
+                        .into());
+                    }
+                }
+            }
+            lattice.update_boundaries();
+            Some(c)
+        } else {
+            None
+        };
         let fluid: Box<dyn FluidBackend<T>> = match backend {
             Backend::Cpu => Box::new(lattice),
             Backend::Gpu => Box::new(GpuFluid::new(
@@ -211,6 +288,7 @@ impl<T: Real> Simulation<T> {
             ramp_s,
             times: StageTimes::default(),
             field_halo,
+            grains,
         };
         sim.apply_ramp();
         Ok(sim)
@@ -239,7 +317,7 @@ impl<T: Real> Simulation<T> {
     /// The fluid stages of one step: collide–stream (with bounce-back and Zou–He links,
     /// the halo exchange overlapped with the inner cells), then the local halo boundaries.
     /// Probes and output are driven by the caller. Collective.
-    pub fn step(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
+    pub fn step(&mut self, comm: &dyn Comm) -> Result<(), StepFailure> {
         let lat = &mut self.fluid;
         let wait0 = lat.lattice().halo_wait_seconds();
         let t = Instant::now();
@@ -248,6 +326,14 @@ impl<T: Real> Simulation<T> {
         self.times.seconds[stage::COLLIDE_STREAM] += t.elapsed().as_secs_f64() - waited;
         self.times.seconds[stage::HALO_WAIT] += waited;
         r?;
+        if let Some(c) = &mut self.grains {
+            let host = lat
+                .host_lattice_mut()
+                .expect("coupled runs are refused on device backends");
+            self.times.time(stage::COUPLING, || c.exchange(host))?;
+            self.times.time(stage::DEM, || c.advance())?;
+            self.times.time(stage::COUPLING, || c.remap(host));
+        }
         self.times
             .time(stage::BOUNDARIES, || lat.update_boundaries());
         self.apply_ramp();
@@ -322,6 +408,20 @@ impl<T: Real> Simulation<T> {
         for (k, (s, target)) in self.series.iter_mut().zip(&self.targets).enumerate() {
             match *target {
                 ProbeTarget::Cell(..) => s.push(step, t, &point[k]),
+                ProbeTarget::Grain(id) => {
+                    let c = self
+                        .grains
+                        .as_ref()
+                        .expect("validated: grain probes need grains");
+                    let g = c.grains();
+                    let i = g.id.iter().position(|&x| x == id).expect("validated id");
+                    let f = c.hydrodynamic()[i];
+                    s.push(
+                        step,
+                        t,
+                        &[g.x[i], g.y[i], g.vx[i], g.vy[i], g.omega[i], f[0], f[1]],
+                    );
+                }
                 ProbeTarget::Solid(id) => {
                     let f = forces[id as usize - 1];
                     s.push(

@@ -17,6 +17,9 @@ use thiserror::Error;
 /// Named results, sorted by name.
 pub type Results = BTreeMap<String, f64>;
 
+/// Momentum of the fluid and of the grains (kg·m/s per metre of depth).
+pub type MomentumPair = [[f64; 2]; 2];
+
 /// An analysis that could not be computed.
 #[derive(Debug, Error)]
 #[error("analysis `{analysis}`: {message}")]
@@ -39,6 +42,10 @@ pub struct Inputs<'a> {
     pub series: &'a [Series],
     /// Totals at step 0 and at the end.
     pub totals: (Totals, Totals),
+    /// Momentum (fluid, grains) at the start and the end of a coupled run (kg·m/s per m).
+    pub momentum: Option<(MomentumPair, MomentumPair)>,
+    /// (id, radius m) of every grain of a coupled run.
+    pub grain_radius: Vec<(u64, f64)>,
 }
 
 /// The result names a scene's analyses will produce (to validate checks before running).
@@ -69,6 +76,25 @@ pub fn result_names(scene: &ValidScene) -> Vec<String> {
                 format!("{probe}.relative_oscillation"),
             ]),
             Analysis::MassDrift => names.push("mass.relative_drift".into()),
+            Analysis::Settling { probe, .. } => names.extend(
+                [
+                    "settling_velocity_m_s",
+                    "reynolds",
+                    "drag_coefficient",
+                    "velocity_drift",
+                ]
+                .map(|q| format!("{probe}.{q}")),
+            ),
+            Analysis::MomentumBalance => names.extend(
+                [
+                    "relative_drift",
+                    "fluid_x_kg_m_s",
+                    "fluid_y_kg_m_s",
+                    "grains_x_kg_m_s",
+                    "grains_y_kg_m_s",
+                ]
+                .map(|q| format!("momentum.{q}")),
+            ),
         }
     }
     names
@@ -124,6 +150,32 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
             Analysis::MassDrift => {
                 let (a, b) = (inp.totals.0.mass, inp.totals.1.mass);
                 r.insert("mass.relative_drift".into(), (b - a) / a);
+            }
+            Analysis::Settling {
+                probe,
+                average_last_s,
+            } => signals::settling(inp, probe, *average_last_s, &mut r)?,
+            Analysis::MomentumBalance => {
+                let Some((p0, p1)) = inp.momentum else {
+                    return Err(err("momentum-balance", "the run has no grains"));
+                };
+                let total = |p: &[[f64; 2]; 2]| [p[0][0] + p[1][0], p[0][1] + p[1][1]];
+                let (a, b) = (total(&p0), total(&p1));
+                let norm = a[0].hypot(a[1]);
+                if norm == 0.0 {
+                    return Err(err(
+                        "momentum-balance",
+                        "the initial momentum is zero: give a grain or the fluid a velocity",
+                    ));
+                }
+                r.insert(
+                    "momentum.relative_drift".into(),
+                    (b[0] - a[0]).hypot(b[1] - a[1]) / norm,
+                );
+                r.insert("momentum.fluid_x_kg_m_s".into(), p1[0][0]);
+                r.insert("momentum.fluid_y_kg_m_s".into(), p1[0][1]);
+                r.insert("momentum.grains_x_kg_m_s".into(), p1[1][0]);
+                r.insert("momentum.grains_y_kg_m_s".into(), p1[1][1]);
             }
         }
     }

@@ -106,6 +106,7 @@ impl DemSystem {
         let wall_start = &self.wall_start;
         let (gravity, alpha) = (self.gravity, self.global_damping);
         let (results_ref, hits_ref) = (&results, &wall_hits);
+        let external = &self.external;
         fx[..owned]
             .par_iter_mut()
             .zip(fy[..owned].par_iter_mut())
@@ -143,6 +144,11 @@ impl DemSystem {
                         let limit = mu_r * r[i] * c.fn_.abs();
                         t += rolling_torque(limit, omega[i], inv_inertia[i], dt);
                     }
+                }
+                if let Some(e) = external.get(i) {
+                    f[0] += e[0];
+                    f[1] += e[1];
+                    t += e[2];
                 }
                 *fxi = f[0];
                 *fyi = f[1];

@@ -100,6 +100,15 @@ impl SizeDistribution {
         }
     }
 
+    /// The smallest radius it can draw.
+    pub fn min_radius(&self) -> f64 {
+        match *self {
+            SizeDistribution::Mono { r } => r,
+            SizeDistribution::Bidisperse { small, large, .. } => small.min(large),
+            SizeDistribution::Uniform { min, .. } | SizeDistribution::Normal { min, .. } => min,
+        }
+    }
+
     /// The largest radius it can draw.
     pub fn max_radius(&self) -> f64 {
         match *self {

@@ -124,6 +124,9 @@ pub struct DemSystem {
     pub(crate) walls_built_at: Vec<[f64; 2]>,
     /// Per wall candidate: the contact, if touching (buffer reused every step).
     pub(crate) wall_hits: Vec<Option<WallHit>>,
+    /// Force (N/m) and torque (N·m/m) from outside the DEM (the fluid) on each owned grain,
+    /// held over the steps until it is set again; empty when nothing acts from outside.
+    pub(crate) external: Vec<[f64; 3]>,
 }
 
 impl DemSystem {
@@ -210,12 +213,41 @@ impl DemSystem {
             wall_cand: Vec::new(),
             walls_built_at: Vec::new(),
             wall_hits: Vec::new(),
+            external: Vec::new(),
         })
     }
 
     /// The largest stable time step λ·Δt_cr for these grains and contacts.
     pub fn stable_time_step(&self, lambda: f64) -> f64 {
         stable_time_step(&self.grains, &self.model, lambda)
+    }
+
+    /// Hold `force` (per owned grain, by index: fx, fy in N/m, torque in N·m/m) on the
+    /// grains from now on, until it is set again. The forces of the last evaluation are
+    /// corrected at once, so the next half kick already uses it: over k steps the grains
+    /// receive exactly k·Δt·force (the sub-cycling of seed eq. 5.61). Precondition: one
+    /// entry per owned grain, and the grains are not re-sorted (`spatial_sort = false`).
+    pub fn set_external(&mut self, force: &[[f64; 3]]) {
+        assert_eq!(
+            force.len(),
+            self.owned,
+            "one external force per owned grain"
+        );
+        if self.external.len() != self.owned {
+            self.external = vec![[0.0; 3]; self.owned];
+        }
+        let g = &mut self.grains;
+        for (i, (new, old)) in force.iter().zip(&mut self.external).enumerate() {
+            g.fx[i] += new[0] - old[0];
+            g.fy[i] += new[1] - old[1];
+            g.torque[i] += new[2] - old[2];
+            *old = *new;
+        }
+    }
+
+    /// The external force and torque held on each owned grain (empty when none was set).
+    pub fn external(&self) -> &[[f64; 3]] {
+        &self.external
     }
 
     /// Grains owned by this system (the first `owned()` of `grains`; the rest are ghosts).

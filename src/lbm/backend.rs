@@ -20,6 +20,11 @@ pub trait FluidBackend<T: Real> {
     fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError>;
     /// Refill local halos (periodic, free-slip, outflow).
     fn update_boundaries(&mut self);
+    /// The host lattice with current populations, for boundary rules outside the fluid
+    /// core (grain coupling); `None` on a device backend.
+    fn host_lattice_mut(&mut self) -> Option<&mut Lattice<T>> {
+        None
+    }
     /// Scale every Zou–He velocity face from the next step on (start-up ramps).
     fn set_inlet_scale(&mut self, factor: f64);
     /// Make sure no instability has happened so far (before output that must be good).
@@ -51,6 +56,9 @@ impl<T: Real> FluidBackend<T> for Lattice<T> {
     }
     fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
         Lattice::stream_collide(self, comm)
+    }
+    fn host_lattice_mut(&mut self) -> Option<&mut Lattice<T>> {
+        Some(self)
     }
     fn update_boundaries(&mut self) {
         Lattice::update_boundaries(self)

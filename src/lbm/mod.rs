@@ -12,6 +12,7 @@ pub mod backend;
 pub mod boundary;
 pub mod collision;
 pub mod d2q9;
+mod external;
 pub mod fields;
 mod forces;
 pub mod geometry;

@@ -39,11 +39,21 @@ pub(super) fn global_state(d: &SlabDem, comm: &dyn Comm) -> (f64, [f64; 2], f64)
 
 /// Prepare the sample of `scene` (identical on every rank; settling runs distributed).
 /// Returns the grains (ids 0..N) and the settling steps.
-pub(super) fn prepare(scene: &ValidGrainScene, comm: &dyn Comm) -> Result<(Grains, u64), RunError> {
+pub(crate) fn prepare(scene: &ValidGrainScene, comm: &dyn Comm) -> Result<(Grains, u64), RunError> {
     let s = &scene.scene;
     let rho = s.grains.density_kg_m3;
     let (grains, settle) = match &s.grains.sample {
         SampleSpec::Csv { file } => (load_csv(&scene.base_dir.join(file), rho)?, None),
+        SampleSpec::List { grains } => {
+            let mut g = Grains::default();
+            for l in grains {
+                let n = g.push(l.position_m, l.radius_m, rho, false);
+                g.vx[n] = l.velocity_m_s[0];
+                g.vy[n] = l.velocity_m_s[1];
+                g.omega[n] = l.angular_velocity_rad_s;
+            }
+            (g, None)
+        }
         SampleSpec::Pack {
             min_m,
             max_m,

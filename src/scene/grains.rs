@@ -179,6 +179,11 @@ pub enum SampleSpec {
         #[serde(default)]
         settle: Option<SettleSpec>,
     },
+    /// Grains listed in the scene (for a few grains: settling, draft–kiss–tumble).
+    List {
+        /// The grains.
+        grains: Vec<ListedGrain>,
+    },
     /// Rows of `x, y, r` (m) from a CSV file, relative to the scene.
     Csv {
         /// Path.
@@ -275,4 +280,20 @@ pub enum GrainAnalysis {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         front_min_height_m: Option<f64>,
     },
+}
+
+/// One grain of a `kind = "list"` sample.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ListedGrain {
+    /// Centre (m).
+    pub position_m: [f64; 2],
+    /// Radius (m).
+    pub radius_m: f64,
+    /// Initial velocity (m/s).
+    #[serde(default)]
+    pub velocity_m_s: [f64; 2],
+    /// Initial angular velocity (rad/s, counter-clockwise).
+    #[serde(default)]
+    pub angular_velocity_rad_s: f64,
 }

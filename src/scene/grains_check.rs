@@ -80,7 +80,7 @@ pub(super) fn rectangle(
     }
 }
 
-fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
+pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
     let mut warnings = Vec::new();
     rectangle(ctx, "min_m", s.region.min_m, s.region.max_m)?;
     let g = &s.grains;
@@ -157,6 +157,34 @@ fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
                 )?;
                 if st.max_steps == 0 {
                     return Err(ctx.err("max_steps", 0, "must be at least 1"));
+                }
+            }
+        }
+        SampleSpec::List { grains } => {
+            if grains.is_empty() {
+                return Err(ctx.err("grains", 0, "the list holds no grains: add at least one"));
+            }
+            for (n, l) in grains.iter().enumerate() {
+                positive(ctx, "radius_m", l.radius_m, "a grain radius")?;
+                let inside = |a: usize| {
+                    l.position_m[a] - l.radius_m >= s.region.min_m[a]
+                        && l.position_m[a] + l.radius_m <= s.region.max_m[a]
+                };
+                let finite = l
+                    .position_m
+                    .iter()
+                    .chain(&l.velocity_m_s)
+                    .all(|v| v.is_finite());
+                if !(finite && inside(0) && inside(1)) {
+                    return Err(ctx.err(
+                        "position_m",
+                        n,
+                        format!(
+                            "grain {n} at {:?} with radius {} m is not wholly inside the domain \
+                             [{:?}, {:?}]; move it inside",
+                            l.position_m, l.radius_m, s.region.min_m, s.region.max_m
+                        ),
+                    ));
                 }
             }
         }

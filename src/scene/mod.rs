@@ -3,6 +3,7 @@
 //! [`Units`] and any warnings.
 
 mod build;
+pub mod coupling;
 mod grains;
 mod grains_check;
 mod mpm;
@@ -121,15 +122,6 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
         return Ok(AnyScene::Mpm(Box::new(parse_mpm(&text, path)?)));
     }
     match (table.contains_key("grains"), table.contains_key("fluid")) {
-        (true, true) => Err(SceneError::Invalid {
-            path: path.to_owned(),
-            line: None,
-            key: "grains".into(),
-            message: "a scene with both [grains] and [fluid] needs fluid–grain coupling, \
-                      which grainflow does not run yet; split it into a fluid scene and a \
-                      grains scene"
-                .into(),
-        }),
         (true, false) => Ok(AnyScene::Grains(Box::new(parse_grains(&text, path)?))),
         _ => Ok(AnyScene::Fluid(Box::new(parse(&text, path)?))),
     }

@@ -30,6 +30,12 @@ pub struct Scene {
     /// Pass/fail checks on probes and derived quantities.
     #[serde(default)]
     pub checks: Vec<Check>,
+    /// Grains in the fluid (DEM disks); with `[coupling]` the scene runs LBM–DEM coupled.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grains: Option<super::grains::GrainsSpec>,
+    /// How the fluid and the grains exchange momentum.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coupling: Option<super::coupling::CouplingSpec>,
 }
 
 /// Lattice size and spacing. The domain spans [0, cells_x·dx] × [0, cells_y·dx].
@@ -399,13 +405,23 @@ pub enum Probe {
         /// Obstacle name.
         obstacle: String,
     },
+    /// State of one grain of a coupled scene: position (m), velocity (m/s), angular
+    /// velocity (rad/s) and the hydrodynamic force on it (N/m).
+    Grain {
+        /// Name (unique).
+        name: String,
+        /// Grain id (the sample's order, from 0).
+        id: u64,
+    },
 }
 
 impl Probe {
     /// The probe's name.
     pub fn name(&self) -> &str {
         match self {
-            Probe::Point { name, .. } | Probe::Force { name, .. } => name,
+            Probe::Point { name, .. } | Probe::Force { name, .. } | Probe::Grain { name, .. } => {
+                name
+            }
         }
     }
 }
@@ -464,6 +480,20 @@ pub enum Analysis {
     },
     /// Relative change of the total fluid mass over the run: `mass.relative_drift`.
     MassDrift,
+    /// Terminal settling of a grain from its probe, averaged over the last
+    /// `average_last_s`: `<probe>.settling_velocity_m_s` (speed), `<probe>.reynolds`
+    /// (U d / ν) and `<probe>.drag_coefficient` (2 W / (ρ U² d), W the submerged weight per
+    /// metre of depth), plus `<probe>.velocity_drift` (relative change of the speed over the
+    /// window's second half: small once terminal).
+    Settling {
+        /// Grain probe.
+        probe: String,
+        /// Averaging window at the end of the run (s).
+        average_last_s: f64,
+    },
+    /// Momentum of fluid plus grains: `momentum.relative_drift` = |p_end − p_0| / |p_0|
+    /// (needs non-zero initial momentum), and `momentum.grains_x_kg_m_s` etc.
+    MomentumBalance,
 }
 
 /// A pass/fail check on a named quantity. Give `max`, `min`, or `expected` with

@@ -195,6 +195,7 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
     validate_obstacles(s, ctx)?;
     validate_run(s, ctx, &units)?;
     validate_probes_and_analyses(s, ctx)?;
+    warnings.extend(super::coupling::validate(s, &units, ctx)?);
     Ok((units, warnings))
 }
 
@@ -411,6 +412,15 @@ fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(), SceneErr
                     return Err(ctx.err("obstacle", 0, format!("force probe `{name}` names obstacle `{obstacle}`, which the scene does not define")));
                 }
             }
+            Probe::Grain { name, .. } => {
+                if s.grains.is_none() {
+                    return Err(ctx.err(
+                        "id",
+                        0,
+                        format!("grain probe `{name}` needs grains: add [grains] and [coupling]"),
+                    ));
+                }
+            }
         }
     }
     let probe_kind = |name: &str| s.probes.iter().find(|p| p.name() == name);
@@ -447,6 +457,31 @@ fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(), SceneErr
                 }
                 positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
                 positive(ctx, "length_m", *length_m, "the reference length")?;
+            }
+            Analysis::Settling {
+                probe,
+                average_last_s,
+            } => {
+                if !matches!(probe_kind(probe), Some(Probe::Grain { .. })) {
+                    return Err(ctx.err(
+                        "probe",
+                        0,
+                        format!("settling needs a grain probe named `{probe}`"),
+                    ));
+                }
+                positive(
+                    ctx,
+                    "average_last_s",
+                    *average_last_s,
+                    "the averaging window",
+                )?;
+            }
+            Analysis::MomentumBalance if s.grains.is_none() => {
+                return Err(ctx.err(
+                    "kind",
+                    0,
+                    "momentum-balance needs grains: add [grains] and [coupling]",
+                ));
             }
             Analysis::Ghia {
                 u_reference,

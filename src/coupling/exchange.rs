@@ -1,0 +1,624 @@
+//! The fluid side of the coupling: after each stream–collide sweep, the cells next to
+//! grains (bounce-back schemes) or inside them (partially saturated method) are recomputed
+//! from the previous buffer with the grains' surfaces applied, and the momentum they hand
+//! to each grain is summed in a fixed order. Between steps, cells that a moving grain
+//! covers or uncovers are handed over with their momentum.
+//!
+//! Momentum is counted on the shifted populations (h = f − w). The rest state's part
+//! (ρ₀ c_s² on the surface) integrates to zero over a closed surface, and leaving it out is
+//! what makes fluid + grain momentum conserved to round-off (tested).
+
+use super::map::{cover, shares, GrainView, Share, SlabFrame, NONE};
+use super::{Refill, Scheme};
+use crate::lbm::collision::{equilibrium, Moments};
+use crate::lbm::d2q9::{CX, CY, OPP, Q, W};
+use crate::lbm::{Lattice, Real};
+use thiserror::Error;
+
+/// A coupled step that cannot go on.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CouplingError {
+    /// A cell next to or inside a grain went NaN or non-positive.
+    #[error("unstable at step {step}: cell ({x}, {y}) next to grain {grain} has density {density} (NaN or ≤ 0); lower the grains' speed in lattice units (smaller time step), raise τ, or refine the lattice")]
+    Unstable {
+        /// Fluid step.
+        step: u64,
+        /// Global cell x.
+        x: usize,
+        /// Cell y.
+        y: usize,
+        /// Grain id.
+        grain: u64,
+        /// The offending density.
+        density: f64,
+    },
+    /// A grain left the fluid domain (through an open or periodic face).
+    #[error("at step {step}: grain {grain} left the fluid domain at {position:?} m; grains cannot cross open or periodic faces yet: close the domain with walls or keep the grains away from them")]
+    Left {
+        /// Fluid step.
+        step: u64,
+        /// Grain id.
+        grain: u64,
+        /// Its centre (m).
+        position: [f64; 2],
+    },
+}
+
+/// Per-grain hydrodynamic force and torque of one step, lattice units (momentum per step;
+/// torque about the grain's centre, per step).
+pub type GrainForce = [f64; 3];
+
+/// The coupling state of one slab.
+pub struct Coupler {
+    scheme: Scheme,
+    refill: Refill,
+    frame: SlabFrame,
+    /// Covering grain per padded cell (bounce-back schemes).
+    owner: Vec<u32>,
+    /// The map being built for the next step (kept for its allocation).
+    next_owner: Vec<u32>,
+    /// Cells (padded, halo included) set in `owner` and in `next_owner`, sorted.
+    touched: Vec<u32>,
+    next_touched: Vec<u32>,
+    /// Interior exterior-fluid cells with at least one covered neighbour, increasing index.
+    boundary: Vec<u32>,
+    /// Interior covered cells, increasing index.
+    covered: Vec<u32>,
+    /// Solid fractions (partially saturated method).
+    shares: Vec<Share>,
+    /// Whether each padded cell is plain fluid in the lattice.
+    fluid: Vec<bool>,
+    /// Force of the last exchange per grain.
+    force: Vec<GrainForce>,
+    /// Momentum handed over by covering and uncovering since the last exchange.
+    handover: Vec<GrainForce>,
+}
+
+impl Coupler {
+    /// A coupler for `grains` grains on the slab `frame`; `fluid(k)` says whether padded
+    /// cell k is plain fluid in the lattice. Place the grains with [`Coupler::start`].
+    pub fn new(
+        scheme: Scheme,
+        refill: Refill,
+        frame: SlabFrame,
+        grains: usize,
+        fluid: impl Fn(usize) -> bool,
+    ) -> Self {
+        let cells = frame.stride * (frame.ny + 2);
+        Self {
+            fluid: (0..cells).map(fluid).collect(),
+            scheme,
+            refill,
+            frame,
+            owner: vec![NONE; cells],
+            next_owner: vec![NONE; cells],
+            touched: Vec::new(),
+            next_touched: Vec::new(),
+            boundary: Vec::new(),
+            covered: Vec::new(),
+            shares: Vec::new(),
+            force: vec![[0.0; 3]; grains],
+            handover: vec![[0.0; 3]; grains],
+        }
+    }
+
+    /// The interface scheme.
+    pub fn scheme(&self) -> Scheme {
+        self.scheme
+    }
+
+    /// Place the grains on the lattice before the first step: build the maps and, for the
+    /// bounce-back schemes, fill the covered cells with equilibrium at the grain velocity.
+    pub fn start<T: Real>(&mut self, lat: &mut Lattice<T>, grains: &[GrainView]) {
+        self.map(lat, grains);
+        self.owner.clone_from(&self.next_owner);
+        self.touched.clone_from(&self.next_touched);
+        self.rebuild_lists(lat);
+        if self.scheme != Scheme::Psm {
+            let plane = lat.plane();
+            let (owner, covered, frame) = (&self.owner, &self.covered, self.frame);
+            let buf = lat.current_buffer_mut();
+            for &k in covered {
+                let g = &grains[owner[k as usize] as usize];
+                let eq = rest_at::<T>(rigid_velocity(&frame, g, frame.centre(k as usize)));
+                for i in 0..Q {
+                    buf[i * plane + k as usize] = eq[i];
+                }
+            }
+        }
+    }
+
+    /// Force and torque on each grain from the last exchange plus any covering and
+    /// uncovering since, lattice units.
+    pub fn forces(&self) -> impl Iterator<Item = GrainForce> + '_ {
+        self.force
+            .iter()
+            .zip(&self.handover)
+            .map(|(f, h)| [f[0] + h[0], f[1] + h[1], f[2] + h[2]])
+    }
+
+    /// Cells covered by a grain now (bounce-back schemes), for output masks: padded indices.
+    pub fn covered_cells(&self) -> &[u32] {
+        &self.covered
+    }
+
+    /// Solid fraction of every interior cell (padded index → Σ ε, capped at 1).
+    pub fn solid_fraction(&self, out: &mut [f64]) {
+        out.fill(0.0);
+        match self.scheme {
+            Scheme::Psm => {
+                for s in &self.shares {
+                    let e = &mut out[s.cell as usize];
+                    *e = (*e + s.fraction).min(1.0);
+                }
+            }
+            _ => {
+                for &k in &self.covered {
+                    out[k as usize] = 1.0;
+                }
+            }
+        }
+    }
+
+    /// Build the next map (owners or shares) for the grains at their current positions.
+    fn map<T: Real>(&mut self, lat: &Lattice<T>, grains: &[GrainView]) {
+        let fluid = |k: usize| lat.is_fluid_at(k);
+        match self.scheme {
+            Scheme::Psm => shares(&self.frame, grains, fluid, &mut self.shares),
+            _ => cover(
+                &self.frame,
+                grains,
+                fluid,
+                &mut self.next_owner,
+                &mut self.next_touched,
+            ),
+        }
+    }
+
+    /// Covered and boundary cell lists from `owner`.
+    fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>) {
+        self.covered.clear();
+        self.boundary.clear();
+        if self.scheme == Scheme::Psm {
+            return;
+        }
+        let f = self.frame;
+        let interior = |k: usize| {
+            let (x, y) = f.local(k);
+            x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
+        };
+        // Every boundary cell neighbours a covered cell (halo ones included).
+        for &k in &self.touched {
+            let k = k as usize;
+            if interior(k) {
+                self.covered.push(k as u32);
+            }
+            for i in 1..Q {
+                let n = neighbour(&f, k, i, 1);
+                if interior(n) && self.owner[n] == NONE && lat.is_fluid_at(n) {
+                    self.boundary.push(n as u32);
+                }
+            }
+        }
+        self.boundary.sort_unstable();
+        self.boundary.dedup();
+    }
+
+    /// Stage "coupling", fluid side: recompute the cells at the grains' surfaces in the
+    /// buffer the sweep just wrote, and record the momentum each grain receives. Call after
+    /// [`Lattice::stream_collide`] and before [`Lattice::update_boundaries`].
+    pub fn exchange<T: Real>(
+        &mut self,
+        lat: &mut Lattice<T>,
+        grains: &[GrainView],
+        ids: &[u64],
+    ) -> Result<(), CouplingError> {
+        for f in &mut self.force {
+            *f = [0.0; 3];
+        }
+        match self.scheme {
+            Scheme::Psm => self.exchange_psm(lat, grains, ids),
+            _ => self.exchange_links(lat, grains, ids),
+        }
+    }
+
+    fn exchange_links<T: Real>(
+        &mut self,
+        lat: &mut Lattice<T>,
+        grains: &[GrainView],
+        ids: &[u64],
+    ) -> Result<(), CouplingError> {
+        let f = self.frame;
+        let plane = lat.plane();
+        let interpolated = self.scheme == Scheme::Interpolated;
+        let step = lat.steps_done();
+        let mut bad = None;
+        // Recompute each boundary cell from the previous buffer (read only), then write.
+        let mut out: Vec<(u32, [T; Q])> = Vec::with_capacity(self.boundary.len());
+        {
+            let prev = lat.previous_buffer();
+            for &kb in &self.boundary {
+                let k = kb as usize;
+                let (x, y) = f.local(k);
+                let mut h = lat.gather_previous(x as usize, y as usize);
+                let centre = f.centre(k);
+                for i in 1..Q {
+                    let n = neighbour(&f, k, i, -1);
+                    let g = self.owner[n];
+                    if g == NONE {
+                        continue;
+                    }
+                    let grain = &grains[g as usize];
+                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                    let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+                    let c = super::map::nearest_image(&f, grain, mid);
+                    let ub = rigid_velocity(&f, grain, mid);
+                    // Ladd 1994 moving-wall term 2 w_i ρ_w (c_i·u_b)/c_s², ρ_w = 1 (seed eq. 5.45).
+                    let ladd = 6.0 * W[i] * (cx * ub[0] + cy * ub[1]);
+                    let out_i = prev[OPP[i] * plane + k].to_f64();
+                    let hi = if interpolated {
+                        let q = super::geometry::link_fraction(centre, [-cx, -cy], c, grain.radius);
+                        let ff = neighbour(&f, k, i, 1);
+                        if q < 0.5 && lat.is_fluid_at(ff) && self.owner[ff] == NONE {
+                            // Bouzidi, Firdaouss & Lallemand 2001, eq. 5 (q < ½), moving wall.
+                            2.0 * q * out_i
+                                + (1.0 - 2.0 * q) * prev[OPP[i] * plane + ff].to_f64()
+                                + ladd
+                        } else if q >= 0.5 {
+                            // Bouzidi et al. 2001, eq. 5 (q ≥ ½).
+                            let same = prev[i * plane + k].to_f64();
+                            (out_i + (2.0 * q - 1.0) * same + ladd) / (2.0 * q)
+                        } else {
+                            out_i + ladd
+                        }
+                    } else {
+                        out_i + ladd
+                    };
+                    h[i] = T::from_f64(hi);
+                    // The grain receives −(f*_ī + f_i) c_i (seed eq. 5.47), torque about its
+                    // centre at the link's midpoint (eq. 5.48).
+                    let m = out_i + h[i].to_f64();
+                    let (px, py) = (-m * cx, -m * cy);
+                    let r = [mid[0] - c[0], mid[1] - c[1]];
+                    let acc = &mut self.force[g as usize];
+                    acc[0] += px;
+                    acc[1] += py;
+                    acc[2] += r[0] * py - r[1] * px;
+                }
+                let m = lat.collide_one(&mut h);
+                if !(m.rho.to_f64() > 0.0) && bad.is_none() {
+                    bad = Some((k, m.rho.to_f64()));
+                }
+                out.push((kb, h));
+            }
+        }
+        let owner = &self.owner;
+        let buf = lat.current_buffer_mut();
+        for (k, h) in &out {
+            for i in 0..Q {
+                buf[i * plane + *k as usize] = h[i];
+            }
+        }
+        // The fluid under a grain rests at its velocity (read by nothing but the refill).
+        for &k in &self.covered {
+            let g = &grains[owner[k as usize] as usize];
+            let eq = rest_at::<T>(rigid_velocity(&f, g, f.centre(k as usize)));
+            for i in 0..Q {
+                buf[i * plane + k as usize] = eq[i];
+            }
+        }
+        if let Some((k, density)) = bad {
+            return Err(self.unstable(step, k, density, grains, ids));
+        }
+        Ok(())
+    }
+
+    fn exchange_psm<T: Real>(
+        &mut self,
+        lat: &mut Lattice<T>,
+        grains: &[GrainView],
+        ids: &[u64],
+    ) -> Result<(), CouplingError> {
+        let f = self.frame;
+        let plane = lat.plane();
+        let tau = lat.tau0();
+        let step = lat.steps_done();
+        let mut bad = None;
+        let mut out: Vec<(u32, [T; Q])> = Vec::new();
+        let mut a = 0;
+        while a < self.shares.len() {
+            let k = self.shares[a].cell as usize;
+            let mut b = a;
+            while b < self.shares.len() && self.shares[b].cell as usize == k {
+                b += 1;
+            }
+            let (x, y) = f.local(k);
+            let h = lat.gather_previous(x as usize, y as usize);
+            let mut post = h;
+            let m = lat.collide_one(&mut post);
+            let m64 = Moments {
+                drho: m.drho.to_f64(),
+                rho: m.rho.to_f64(),
+                ux: m.ux.to_f64(),
+                uy: m.uy.to_f64(),
+            };
+            let eq_fluid = equilibrium(&m64);
+            let hf: [f64; Q] = std::array::from_fn(|i| h[i].to_f64());
+            let eps: f64 = self.shares[a..b].iter().map(|s| s.fraction).sum();
+            let eps_c = eps.min(1.0);
+            // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
+            let b_total = eps_c * (tau - 0.5) / ((1.0 - eps_c) + (tau - 0.5));
+            let mut result: [f64; Q] = std::array::from_fn(|i| (1.0 - b_total) * post[i].to_f64());
+            let centre = f.centre(k);
+            for s in &self.shares[a..b] {
+                let grain = &grains[s.grain as usize];
+                let bg = b_total * s.fraction / eps;
+                let us = rigid_velocity(&f, grain, centre);
+                let eq_solid = equilibrium(&Moments {
+                    ux: us[0],
+                    uy: us[1],
+                    ..m64
+                });
+                let mut p = [0.0; 2];
+                for i in 0..Q {
+                    let j = OPP[i];
+                    // Noble & Torczynski 1998, eq. 8: Ω^s_i = [f_ī − f^eq_ī(ρ, u)] − [f_i − f^eq_i(ρ, u_s)].
+                    let omega_s = (hf[j] - eq_fluid[j]) - (hf[i] - eq_solid[i]);
+                    result[i] += bg * (hf[i] + omega_s);
+                    p[0] += bg * omega_s * CX[i] as f64;
+                    p[1] += bg * omega_s * CY[i] as f64;
+                }
+                // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
+                let r = [centre[0] - s.centre[0], centre[1] - s.centre[1]];
+                let acc = &mut self.force[s.grain as usize];
+                acc[0] -= p[0];
+                acc[1] -= p[1];
+                acc[2] -= r[0] * p[1] - r[1] * p[0];
+            }
+            let rho = 1.0 + result.iter().sum::<f64>();
+            if !(rho > 0.0) && bad.is_none() {
+                bad = Some((k, rho));
+            }
+            out.push((k as u32, result.map(T::from_f64)));
+            a = b;
+        }
+        let buf = lat.current_buffer_mut();
+        for (k, h) in &out {
+            for i in 0..Q {
+                buf[i * plane + *k as usize] = h[i];
+            }
+        }
+        if let Some((k, density)) = bad {
+            return Err(self.unstable(step, k, density, grains, ids));
+        }
+        Ok(())
+    }
+
+    fn unstable(
+        &self,
+        step: u64,
+        k: usize,
+        density: f64,
+        grains: &[GrainView],
+        ids: &[u64],
+    ) -> CouplingError {
+        let p = self.frame.centre(k);
+        let nearest = (0..grains.len())
+            .min_by(|&a, &b| {
+                let d = |g: usize| {
+                    let c = super::map::nearest_image(&self.frame, &grains[g], p);
+                    (c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap_or(0);
+        let (x, y) = self.frame.local(k);
+        CouplingError::Unstable {
+            step,
+            x: (x + self.frame.x0 as i64) as usize,
+            y: y as usize,
+            grain: ids.get(nearest).copied().unwrap_or(0),
+            density,
+        }
+    }
+
+    /// Stage "coupling", after the grains moved: map them again. A fluid cell that a grain
+    /// now covers hands its momentum to the grain; a cell a grain uncovers is refilled
+    /// (equilibrium at the surface velocity with its fluid neighbours' mean density, plus
+    /// their non-equilibrium part with [`Refill::Extrapolation`]) and its momentum is taken
+    /// from the grain. Both are added to the next step's force. Call before
+    /// [`Lattice::update_boundaries`].
+    pub fn remap<T: Real>(&mut self, lat: &mut Lattice<T>, grains: &[GrainView]) {
+        for h in &mut self.handover {
+            *h = [0.0; 3];
+        }
+        self.map(lat, grains);
+        if self.scheme == Scheme::Psm {
+            return;
+        }
+        let f = self.frame;
+        let plane = lat.plane();
+        let mut refills: Vec<(usize, [T; Q])> = Vec::new();
+        {
+            let buf = lat.current_buffer();
+            // Only cells covered before or after can change hands; each is visited once
+            // (the lists are sorted, so the order, and every sum, is fixed).
+            let mut changed: Vec<u32> = self
+                .covered
+                .iter()
+                .copied()
+                .chain(self.next_touched.iter().copied().filter(|&k| {
+                    let (x, y) = f.local(k as usize);
+                    x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
+                }))
+                .collect();
+            changed.sort_unstable();
+            changed.dedup();
+            for k in changed {
+                let k = k as usize;
+                {
+                    let (old, new) = (self.owner[k], self.next_owner[k]);
+                    if old == new {
+                        continue;
+                    }
+                    let p = f.centre(k);
+                    if old == NONE {
+                        // Covered: the grain takes the cell's momentum (Aidun, Lu & Ding 1998).
+                        let j = momentum(buf, plane, k);
+                        self.hand(new, grains, p, j, 1.0);
+                    } else if new == NONE {
+                        let g = &grains[old as usize];
+                        let h = self.refill_cell(buf, plane, k, g, p);
+                        let j = momentum(&h, 1, 0);
+                        self.hand(old, grains, p, j, -1.0);
+                        refills.push((k, h));
+                    }
+                }
+            }
+        }
+        let buf = lat.current_buffer_mut();
+        for (k, h) in refills {
+            for i in 0..Q {
+                buf[i * plane + k] = h[i];
+            }
+        }
+        std::mem::swap(&mut self.owner, &mut self.next_owner);
+        std::mem::swap(&mut self.touched, &mut self.next_touched);
+        self.rebuild_lists(lat);
+    }
+
+    /// Add `sign · j` (momentum at point p) to grain g's handover.
+    fn hand(&mut self, g: u32, grains: &[GrainView], p: [f64; 2], j: [f64; 2], sign: f64) {
+        let c = super::map::nearest_image(&self.frame, &grains[g as usize], p);
+        let r = [p[0] - c[0], p[1] - c[1]];
+        let h = &mut self.handover[g as usize];
+        h[0] += sign * j[0];
+        h[1] += sign * j[1];
+        h[2] += sign * (r[0] * j[1] - r[1] * j[0]);
+    }
+
+    /// Populations for a cell that grain `g` has just uncovered.
+    fn refill_cell<T: Real>(
+        &self,
+        buf: &[T],
+        plane: usize,
+        k: usize,
+        g: &GrainView,
+        p: [f64; 2],
+    ) -> [T; Q] {
+        let f = self.frame;
+        let u = rigid_velocity(&f, g, p);
+        let mut rho_sum = 0.0;
+        let mut n = 0;
+        let c = super::map::nearest_image(&f, g, p);
+        let normal = [p[0] - c[0], p[1] - c[1]];
+        let mut along: Option<(f64, usize)> = None;
+        let (x, y) = f.local(k);
+        for i in 1..Q {
+            let (xm, ym) = (x + CX[i] as i64, y + CY[i] as i64);
+            let m = neighbour(&f, k, i, 1);
+            let interior = xm >= 0 && ym >= 0 && xm < f.nx as i64 && ym < f.ny as i64;
+            if !interior || !self.fluid[m] || !self.is_exterior_fluid(m) {
+                continue;
+            }
+            rho_sum += 1.0 + (0..Q).map(|j| buf[j * plane + m].to_f64()).sum::<f64>();
+            n += 1;
+            let dot = (CX[i] as f64 * normal[0] + CY[i] as f64 * normal[1])
+                / ((CX[i] * CX[i] + CY[i] * CY[i]) as f64).sqrt();
+            if along.is_none_or(|(d, _)| dot > d) {
+                along = Some((dot, m));
+            }
+        }
+        let rho = if n > 0 { rho_sum / n as f64 } else { 1.0 };
+        let eq = equilibrium(&Moments {
+            drho: rho - 1.0,
+            rho,
+            ux: u[0],
+            uy: u[1],
+        });
+        let mut h = eq;
+        if let (Refill::Extrapolation, Some((_, m))) = (self.refill, along) {
+            // Caiazzo 2005: f = f^eq(ρ̄, u_s) + f^neq of the fluid neighbour along the normal.
+            let hm: [f64; Q] = std::array::from_fn(|j| buf[j * plane + m].to_f64());
+            let eq_m = equilibrium(&moments_of(&hm));
+            for j in 0..Q {
+                h[j] += hm[j] - eq_m[j];
+            }
+        }
+        h.map(T::from_f64)
+    }
+
+    /// Whether padded cell `k` is fluid that no grain covers (under the map being built).
+    fn is_exterior_fluid(&self, k: usize) -> bool {
+        self.next_owner[k] == NONE && self.owner[k] == NONE
+    }
+
+    /// Momentum of the fluid in the interior cells no grain covers (lattice units), summed
+    /// row by row: the fluid half of the momentum balance.
+    pub fn fluid_momentum<T: Real>(&self, lat: &Lattice<T>) -> [f64; 2] {
+        let f = self.frame;
+        let buf = lat.current_buffer();
+        let plane = lat.plane();
+        let mut total = [0.0; 2];
+        for y in 0..f.ny as i64 {
+            for x in 0..f.nx as i64 {
+                let k = f.padded(x, y);
+                if !lat.is_fluid_at(k) || (self.scheme != Scheme::Psm && self.owner[k] != NONE) {
+                    continue;
+                }
+                let j = momentum(buf, plane, k);
+                total[0] += j[0];
+                total[1] += j[1];
+            }
+        }
+        total
+    }
+}
+
+/// Velocity of grain `g`'s rigid motion at point `p`, about its image nearest to `p`.
+#[inline]
+fn rigid_velocity(f: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] {
+    let c = super::map::nearest_image(f, g, p);
+    GrainView { centre: c, ..*g }.surface_velocity(p)
+}
+
+/// Padded index of the neighbour of `k` at `sign · c_i`.
+#[inline]
+fn neighbour(f: &SlabFrame, k: usize, i: usize, sign: i64) -> usize {
+    (k as i64 + sign * (CX[i] as i64 + CY[i] as i64 * f.stride as i64)) as usize
+}
+
+/// Σ h_i c_i of padded cell `k`.
+fn momentum<T: Real>(buf: &[T], plane: usize, k: usize) -> [f64; 2] {
+    let mut j = [0.0; 2];
+    for i in 1..Q {
+        let h = buf[i * plane + k].to_f64();
+        j[0] += h * CX[i] as f64;
+        j[1] += h * CY[i] as f64;
+    }
+    j
+}
+
+/// Density and velocity of shifted populations (no force correction).
+fn moments_of(h: &[f64; Q]) -> Moments<f64> {
+    let drho: f64 = h.iter().sum();
+    let j = momentum(h, 1, 0);
+    let rho = 1.0 + drho;
+    Moments {
+        drho,
+        rho,
+        ux: j[0] / rho,
+        uy: j[1] / rho,
+    }
+}
+
+/// Shifted equilibrium at ρ = 1 and velocity u.
+fn rest_at<T: Real>(u: [f64; 2]) -> [T; Q] {
+    equilibrium(&Moments {
+        drho: 0.0,
+        rho: 1.0,
+        ux: u[0],
+        uy: u[1],
+    })
+    .map(T::from_f64)
+}

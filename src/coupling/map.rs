@@ -1,0 +1,215 @@
+//! Grains seen by the lattice: their lattice-unit state, which cells each covers (the
+//! bounce-back schemes) and how much of each cell it fills (the partially saturated
+//! method).
+
+use super::geometry::{cell_fraction, covers};
+
+/// No grain covers the cell.
+pub const NONE: u32 = u32::MAX;
+
+/// One grain in lattice units of this slab's frame (global x, cells; velocities in cells
+/// per step; ω in radians per step).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GrainView {
+    /// Centre (cells, global frame: cell (x, y) spans [x, x+1) × [y, y+1)).
+    pub centre: [f64; 2],
+    /// Radius (cells).
+    pub radius: f64,
+    /// Velocity of the centre (cells per step).
+    pub velocity: [f64; 2],
+    /// Angular velocity (radians per step, counter-clockwise).
+    pub omega: f64,
+}
+
+impl GrainView {
+    /// Velocity of the rigid body at point `p` (global lattice coordinates): v + ω × r
+    /// (seed eq. 5.46).
+    #[inline]
+    pub fn surface_velocity(&self, p: [f64; 2]) -> [f64; 2] {
+        let r = [p[0] - self.centre[0], p[1] - self.centre[1]];
+        [
+            self.velocity[0] - self.omega * r[1],
+            self.velocity[1] + self.omega * r[0],
+        ]
+    }
+}
+
+/// The geometry of one slab (interior `nx × ny` cells starting at global column `x0`, with a
+/// one-cell halo) and how its x and y faces wrap.
+#[derive(Debug, Clone, Copy)]
+pub struct SlabFrame {
+    /// Interior columns of this slab.
+    pub nx: usize,
+    /// Rows.
+    pub ny: usize,
+    /// Global column of local column 0.
+    pub x0: usize,
+    /// Columns of the whole lattice.
+    pub global_nx: usize,
+    /// Padded row length.
+    pub stride: usize,
+    /// The x faces are periodic.
+    pub periodic_x: bool,
+    /// The y faces are periodic.
+    pub periodic_y: bool,
+}
+
+impl SlabFrame {
+    /// Padded index of local cell (x, y), x ∈ [−1, nx], y ∈ [−1, ny].
+    #[inline]
+    pub fn padded(&self, x: i64, y: i64) -> usize {
+        (y + 1) as usize * self.stride + (x + 1) as usize
+    }
+
+    /// Local (x, y) of padded index `k`.
+    #[inline]
+    pub fn local(&self, k: usize) -> (i64, i64) {
+        ((k % self.stride) as i64 - 1, (k / self.stride) as i64 - 1)
+    }
+
+    /// Centre of padded cell `k` in global lattice coordinates.
+    #[inline]
+    pub fn centre(&self, k: usize) -> [f64; 2] {
+        let (x, y) = self.local(k);
+        [(x + self.x0 as i64) as f64 + 0.5, y as f64 + 0.5]
+    }
+
+    /// The periodic images of a grain's centre that can reach this padded slab: the centre
+    /// itself, shifted by ± the lattice size along periodic axes.
+    pub fn images(&self, g: &GrainView) -> impl Iterator<Item = [f64; 2]> + '_ {
+        let sx: &[f64] = if self.periodic_x {
+            &[0.0, 1.0, -1.0]
+        } else {
+            &[0.0]
+        };
+        let sy: &[f64] = if self.periodic_y {
+            &[0.0, 1.0, -1.0]
+        } else {
+            &[0.0]
+        };
+        let (gnx, ny) = (self.global_nx as f64, self.ny as f64);
+        let centre = g.centre;
+        let reach = g.radius + 2.0;
+        let (lo, hi) = (self.x0 as f64 - 1.0, (self.x0 + self.nx) as f64 + 1.0);
+        sx.iter()
+            .flat_map(move |&a| {
+                sy.iter()
+                    .map(move |&b| [centre[0] + a * gnx, centre[1] + b * ny])
+            })
+            .filter(move |c| c[0] + reach >= lo && c[0] - reach <= hi)
+    }
+
+    /// Padded cells within the bounding box of a disk at `c` with radius `r` (global frame),
+    /// clipped to the padded slab; calls `f(k, local x, local y)`.
+    pub fn for_box(&self, c: [f64; 2], r: f64, mut f: impl FnMut(usize, i64, i64)) {
+        let x0 = self.x0 as i64;
+        let xa = ((c[0] - r).floor() as i64 - x0).max(-1);
+        let xb = ((c[0] + r).floor() as i64 - x0).min(self.nx as i64);
+        let ya = ((c[1] - r).floor() as i64).max(-1);
+        let yb = ((c[1] + r).floor() as i64).min(self.ny as i64);
+        for y in ya..=yb {
+            for x in xa..=xb {
+                f(self.padded(x, y), x, y);
+            }
+        }
+    }
+}
+
+/// Which grain covers each padded cell, for the bounce-back schemes: a cell whose centre
+/// lies inside a grain belongs to it (the nearest centre when two overlap, the lower index
+/// on a tie). Only plain fluid cells of the lattice can be covered.
+///
+/// `touched` holds, on entry, the cells this map set last time (they are cleared, so the
+/// cost follows the grains' area, not the lattice's); on exit, the cells set now, sorted.
+pub fn cover(
+    frame: &SlabFrame,
+    grains: &[GrainView],
+    fluid: impl Fn(usize) -> bool,
+    owner: &mut [u32],
+    touched: &mut Vec<u32>,
+) {
+    for &k in touched.iter() {
+        owner[k as usize] = NONE;
+    }
+    touched.clear();
+    for (g, grain) in grains.iter().enumerate() {
+        for c in frame.images(grain) {
+            frame.for_box(c, grain.radius, |k, x, y| {
+                let gx = x + frame.x0 as i64;
+                if !fluid(k) || !covers(c, grain.radius, gx, y) {
+                    return;
+                }
+                let o = owner[k];
+                if o == NONE {
+                    owner[k] = g as u32;
+                    touched.push(k as u32);
+                } else if o != g as u32 {
+                    let p = frame.centre(k);
+                    let d2 = |q: [f64; 2]| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                    let other = nearest_image(frame, &grains[o as usize], p);
+                    if d2(c) < d2(other) {
+                        owner[k] = g as u32;
+                    }
+                }
+            });
+        }
+    }
+    touched.sort_unstable();
+}
+
+/// The image of grain `g` nearest to point `p`.
+pub fn nearest_image(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] {
+    let mut best = g.centre;
+    let mut bd = f64::INFINITY;
+    for c in frame.images(g) {
+        let d = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2);
+        if d < bd {
+            bd = d;
+            best = c;
+        }
+    }
+    best
+}
+
+/// One grain's share of one cell for the partially saturated method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Share {
+    /// Padded cell index.
+    pub cell: u32,
+    /// Grain index.
+    pub grain: u32,
+    /// Solid fraction ε of the cell covered by this grain (exact disk–square area).
+    pub fraction: f64,
+    /// The grain's centre image nearest to the cell (global lattice coordinates).
+    pub centre: [f64; 2],
+}
+
+/// Solid fractions of every interior plain-fluid cell a grain overlaps, sorted by cell and
+/// then grain (so every sum over them has a fixed order).
+pub fn shares(
+    frame: &SlabFrame,
+    grains: &[GrainView],
+    fluid: impl Fn(usize) -> bool,
+    out: &mut Vec<Share>,
+) {
+    out.clear();
+    for (g, grain) in grains.iter().enumerate() {
+        for c in frame.images(grain) {
+            frame.for_box(c, grain.radius, |k, x, y| {
+                if x < 0 || y < 0 || x >= frame.nx as i64 || y >= frame.ny as i64 || !fluid(k) {
+                    return;
+                }
+                let e = cell_fraction(c, grain.radius, x + frame.x0 as i64, y);
+                if e > 0.0 {
+                    out.push(Share {
+                        cell: k as u32,
+                        grain: g as u32,
+                        fraction: e,
+                        centre: c,
+                    });
+                }
+            });
+        }
+    }
+    out.sort_by_key(|s| (s.cell, s.grain));
+}

@@ -1,0 +1,269 @@
+//! LBM–DEM coupling: the three interface schemes against the fluid core's own obstacle
+//! drag, the momentum balance of fluid + grains, a settling disk, and bad input.
+//! `cargo test --release --test coupling -- --nocapture` prints every figure.
+mod common;
+use common::*;
+use grainflow::run::Status;
+
+/// A body-force channel (periodic in x, walls south and north), 96 × 48 cells, with a disk
+/// of radius 6 cells at its centre: either a fixed obstacle or a grain (`grain = true`)
+/// so heavy that it does not move measurably in 3000 steps.
+fn channel(grain: bool, scheme: &str) -> String {
+    let body = if grain {
+        format!(
+            r#"
+[grains]
+density_kg_m3 = 1.0e12
+gravity_m_s2 = [0.0, 0.0]
+[grains.contact]
+normal_stiffness_n_m2 = 1.0e5
+tangential_stiffness_n_m2 = 0.5e5
+restitution = 0.5
+friction = 0.3
+[grains.sample]
+kind = "list"
+grains = [{{ position_m = [0.048, 0.024], radius_m = 0.006 }}]
+[coupling]
+scheme = "{scheme}"
+substeps = 1
+
+[[probes]]
+kind = "grain"
+name = "disk"
+id = 0
+"#
+        )
+    } else {
+        r#"
+[[obstacles]]
+name = "disk"
+shape = "circle"
+centre_m = [0.048, 0.024]
+radius_m = 0.006
+
+[[probes]]
+kind = "force"
+name = "disk"
+obstacle = "disk"
+"#
+        .to_string()
+    };
+    format!(
+        r#"title = "channel with a disk"
+[domain]
+cells = [96, 48]
+spacing_m = 0.001
+
+[fluid]
+density_kg_m3 = 1000.0
+viscosity_m2_s = 1.0e-4
+reference_velocity_m_s = 0.01
+reference_length_m = 0.012
+relaxation_time = 0.8
+body_acceleration_m_s2 = [0.002, 0.0]
+
+[boundaries]
+west = {{ kind = "periodic" }}
+east = {{ kind = "periodic" }}
+south = {{ kind = "wall" }}
+north = {{ kind = "wall" }}
+
+[run]
+steps = 3000
+output_every = 0
+probe_every = 3000
+{body}"#
+    )
+}
+
+fn last_force(s: &grainflow::run::Summary) -> [f64; 2] {
+    let p = &s.probes["disk"];
+    [p["fx_n_per_m"], p["fy_n_per_m"]]
+}
+
+#[test]
+fn held_grain_feels_the_obstacle_drag() {
+    let dir = tempfile::tempdir().unwrap();
+    let (obstacle, _a) = run_text(&channel(false, ""), dir.path(), None);
+    assert_eq!(obstacle.status, Status::Ok, "{:?}", obstacle.error);
+    let fo = last_force(&obstacle);
+    eprintln!("obstacle drag: {fo:?} N/m");
+    for (scheme, limit) in [("bounce-back", 1e-6), ("interpolated", 0.05), ("psm", 0.05)] {
+        let (g, _b) = run_text(&channel(true, scheme), dir.path(), None);
+        assert_eq!(g.status, Status::Ok, "{scheme}: {:?}", g.error);
+        let fg = last_force(&g);
+        let rel = (fg[0] - fo[0]).abs() / fo[0].abs();
+        eprintln!("{scheme}: grain drag {fg:?} N/m, relative difference {rel:.3e} (limit {limit})");
+        // Same cells, same links: bounce-back must give the obstacle's momentum exchange
+        // to round-off (the issue asks 1 %). The curved-surface schemes see another
+        // geometry (the disk itself, not its staircase); they must stay within 5 %.
+        assert!(rel <= limit, "{scheme}: {rel}");
+        assert!(fg[1].abs() < 1e-3 * fo[0].abs(), "{scheme}: lift {}", fg[1]);
+    }
+}
+
+/// A closed periodic box (no walls, no body force, no gravity) with two grains moving
+/// through fluid at rest: fluid + grain momentum must stay constant.
+fn momentum_box(scheme: &str) -> String {
+    format!(
+        r#"title = "momentum balance"
+[domain]
+cells = [64, 64]
+spacing_m = 0.001
+
+[fluid]
+density_kg_m3 = 1000.0
+viscosity_m2_s = 1.0e-4
+reference_velocity_m_s = 0.02
+reference_length_m = 0.01
+relaxation_time = 0.7
+
+[boundaries]
+west = {{ kind = "periodic" }}
+east = {{ kind = "periodic" }}
+south = {{ kind = "periodic" }}
+north = {{ kind = "periodic" }}
+
+[grains]
+density_kg_m3 = 3000.0
+gravity_m_s2 = [0.0, 0.0]
+[grains.contact]
+normal_stiffness_n_m2 = 1.0e4
+tangential_stiffness_n_m2 = 0.5e4
+restitution = 0.8
+friction = 0.3
+[grains.sample]
+kind = "list"
+grains = [
+  {{ position_m = [0.020, 0.030], radius_m = 0.005, velocity_m_s = [0.01, 0.004], angular_velocity_rad_s = 2.0 }},
+  {{ position_m = [0.044, 0.034], radius_m = 0.004, velocity_m_s = [-0.006, -0.002] }},
+]
+[coupling]
+scheme = "{scheme}"
+
+[run]
+steps = 10000
+output_every = 0
+
+[[analyses]]
+kind = "momentum-balance"
+"#
+    )
+}
+
+#[test]
+fn fluid_and_grain_momentum_is_conserved() {
+    let dir = tempfile::tempdir().unwrap();
+    for scheme in ["bounce-back", "psm"] {
+        let (s, _o) = run_text(&momentum_box(scheme), dir.path(), None);
+        assert_eq!(s.status, Status::Ok, "{scheme}: {:?}", s.error);
+        let drift = result(&s, "momentum.relative_drift");
+        let (gx, fx) = (
+            result(&s, "momentum.grains_x_kg_m_s"),
+            result(&s, "momentum.fluid_x_kg_m_s"),
+        );
+        eprintln!(
+            "{scheme}: relative momentum drift over 10⁴ steps {drift:.3e}; grains px {gx:.4e}, fluid px {fx:.4e}"
+        );
+        // The grains hand a real share of their momentum to the fluid, so the balance is
+        // tested, not trivially met.
+        assert!(
+            fx.abs() > 0.1 * (gx + fx).abs(),
+            "{scheme}: the fluid barely moved"
+        );
+        assert!(drift <= 1e-10, "{scheme}: drift {drift}");
+    }
+}
+
+/// The settling scene of `jobs/settling/` at 8 cells per diameter (CI speed), each scheme:
+/// the scene's checks (terminal velocity and C_D within 5 % of Wu & Shu 2009 at Re = 20).
+#[test]
+fn settling_disk_reaches_the_reference_terminal_velocity() {
+    let mut speeds = Vec::new();
+    for scheme in ["bounce-back", "interpolated", "psm"] {
+        let text = scene_variant(
+            "jobs/settling/disk-8.toml",
+            &[("scheme = \"psm\"", &format!("scheme = \"{scheme}\""))],
+        );
+        let (s, _o) = run_text(&text, &root().join("jobs/settling"), None);
+        eprintln!("{scheme}:");
+        assert_checks_pass(&s);
+        let u = result(&s, "disk.settling_velocity_m_s");
+        let cd = result(&s, "disk.drag_coefficient");
+        let re = result(&s, "disk.reynolds");
+        eprintln!("{scheme}: U = {u:.5e} m/s, Re = {re:.2}, C_D = {cd:.3}");
+        speeds.push(u);
+    }
+    let mean = speeds.iter().sum::<f64>() / 3.0;
+    for u in &speeds {
+        // The three interfaces resolve the same disk: within 3 % of each other.
+        assert!((u - mean).abs() < 0.03 * mean, "{speeds:?}");
+    }
+}
+
+#[test]
+fn bad_coupled_scenes_name_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.toml");
+    let base = momentum_box("psm");
+    let cases: Vec<(String, &str)> = vec![
+        (
+            base.replace("scheme = \"psm\"", "scheme = \"ibm\""),
+            "unknown variant `ibm`",
+        ),
+        (
+            base.replace("density_kg_m3 = 3000.0", "density_kg_m3 = 900.0"),
+            "must exceed the fluid's",
+        ),
+        (
+            base.replace("radius_m = 0.004", "radius_m = 0.001"),
+            "cells across",
+        ),
+        (
+            base.replace("position_m = [0.044, 0.034]", "position_m = [0.070, 0.034]"),
+            "not wholly inside the domain",
+        ),
+        (
+            base.replace("[coupling]\nscheme = \"psm\"\n", ""),
+            "add a [coupling] table",
+        ),
+        (
+            {
+                let i = base.find("[grains]").unwrap();
+                let j = base.find("[run]").unwrap();
+                let rest = base[j..].replace("[[analyses]]\nkind = \"momentum-balance\"\n", "");
+                format!("{}[coupling]\nscheme = \"psm\"\n{rest}", &base[..i])
+            },
+            "[coupling] needs grains",
+        ),
+        (
+            base.replace("scheme = \"psm\"", "scheme = \"psm\"\nsubsteps = 0"),
+            "substeps",
+        ),
+        (
+            base.replace("restitution = 0.8", "restitution = 0.8\nstiffness = 1"),
+            "unknown field `stiffness`",
+        ),
+    ];
+    for (text, needle) in cases {
+        std::fs::write(&path, &text).unwrap();
+        let e = grainflow::scene::load_any(&path).err();
+        let msg = e.map(|e| e.to_string()).unwrap_or_default();
+        assert!(msg.contains(needle), "expected `{needle}`, got `{msg}`");
+        eprintln!("ok: {msg}");
+    }
+}
+
+#[test]
+fn coupled_run_that_blows_up_stops_with_the_step() {
+    // A grain thrown at Mach ≈ 0.9 in lattice units.
+    let dir = tempfile::tempdir().unwrap();
+    let text = momentum_box("bounce-back")
+        .replace("velocity_m_s = [0.01, 0.004]", "velocity_m_s = [1.5, 0.0]")
+        .replace("steps = 10000", "steps = 2000");
+    let (s, _o) = run_text(&text, dir.path(), None);
+    assert_eq!(s.status, Status::Unstable);
+    let e = s.error.unwrap();
+    eprintln!("{e}");
+    assert!(e.contains("unstable at step"), "{e}");
+}
