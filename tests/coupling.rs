@@ -267,3 +267,17 @@ fn coupled_run_that_blows_up_stops_with_the_step() {
     eprintln!("{e}");
     assert!(e.contains("unstable at step"), "{e}");
 }
+
+/// Draft, kiss and tumble (`jobs/dkt/dkt.toml`, Glowinski et al. 2001's setup, PSM): the
+/// scene's checks (draft, kiss, tumble and separation in order, no overlap).
+#[test]
+fn two_disks_draft_kiss_and_tumble() {
+    let (s, _o) = run_scene(&root().join("jobs/dkt/dkt.toml"), None);
+    for q in ["kiss_time", "tumble_time", "separation_time", "min_gap"] {
+        eprintln!("dkt.{q} = {:.3}", result(&s, &format!("dkt.{q}")));
+    }
+    assert_checks_pass(&s);
+    // The phases come in order.
+    let (kiss, tumble) = (result(&s, "dkt.kiss_time"), result(&s, "dkt.tumble_time"));
+    assert!(kiss < tumble && tumble <= result(&s, "dkt.separation_time"));
+}

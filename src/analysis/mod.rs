@@ -6,6 +6,7 @@
 pub mod checks;
 pub mod collapse;
 pub mod flows;
+pub mod sedimentation;
 mod signals;
 
 use crate::io::probes::Series;
@@ -85,6 +86,20 @@ pub fn result_names(scene: &ValidScene) -> Vec<String> {
                 ]
                 .map(|q| format!("{probe}.{q}")),
             ),
+            Analysis::DraftKissTumble { .. } => names.extend(
+                [
+                    "kiss_time",
+                    "min_gap",
+                    "tumble_time",
+                    "separation_time",
+                    "draft",
+                    "tumbled",
+                    "separated",
+                    "lower_velocity_m_s",
+                    "upper_velocity_m_s",
+                ]
+                .map(|q| format!("dkt.{q}")),
+            ),
             Analysis::MomentumBalance => names.extend(
                 [
                     "relative_drift",
@@ -154,7 +169,20 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
             Analysis::Settling {
                 probe,
                 average_last_s,
-            } => signals::settling(inp, probe, *average_last_s, &mut r)?,
+            } => sedimentation::settling(inp, probe, *average_last_s, &mut r)?,
+            Analysis::DraftKissTumble {
+                lower,
+                upper,
+                contact_gap_m,
+                average_last_s,
+            } => sedimentation::draft_kiss_tumble(
+                inp,
+                lower,
+                upper,
+                *contact_gap_m,
+                *average_last_s,
+                &mut r,
+            )?,
             Analysis::MomentumBalance => {
                 let Some((p0, p1)) = inp.momentum else {
                     return Err(err("momentum-balance", "the run has no grains"));

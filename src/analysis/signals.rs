@@ -5,7 +5,11 @@ use crate::io::probes::Series;
 use crate::scene::Signal;
 use rustfft::{num_complex::Complex, FftPlanner};
 
-fn find<'a>(inp: &'a Inputs, probe: &str, analysis: &str) -> Result<&'a Series, AnalysisError> {
+pub(super) fn find<'a>(
+    inp: &'a Inputs,
+    probe: &str,
+    analysis: &str,
+) -> Result<&'a Series, AnalysisError> {
     inp.series
         .iter()
         .find(|s| s.name == probe)
@@ -36,59 +40,6 @@ pub fn force_coefficients(
     let q = 0.5 * inp.scene.scene.fluid.density_kg_m3 * u * u * d;
     r.insert(format!("{probe}.drag_coefficient"), mean(0) / q);
     r.insert(format!("{probe}.lift_coefficient"), mean(1) / q);
-    Ok(())
-}
-
-/// Terminal settling of a grain from its probe (columns x, y, vx, vy, …), averaged over the
-/// last `window_s`: speed U, Re = U d / ν and C_D = 2 W / (ρ U² d) with W = (ρ_s − ρ) |g| π r²
-/// the submerged weight per metre of depth (2-D disk: U_t = √(π g d (ρ_s/ρ − 1) / (2 C_D))).
-pub fn settling(
-    inp: &Inputs,
-    probe: &str,
-    window_s: f64,
-    r: &mut Results,
-) -> Result<(), AnalysisError> {
-    let s = find(inp, probe, "settling")?;
-    let sc = &inp.scene.scene;
-    let (Some(g), Some(crate::scene::Probe::Grain { id, .. })) =
-        (&sc.grains, sc.probes.iter().find(|p| p.name() == probe))
-    else {
-        return Err(err("settling", "needs a grain probe and grains"));
-    };
-    let radius = inp
-        .grain_radius
-        .iter()
-        .find(|(i, _)| i == id)
-        .map(|(_, r)| *r)
-        .ok_or_else(|| err("settling", format!("no grain with id {id}")))?;
-    let t_end = *s.times.last().expect("non-empty");
-    let speed = |i: usize| {
-        let row = &s.values[i * s.columns.len()..(i + 1) * s.columns.len()];
-        row[2].hypot(row[3])
-    };
-    let mean = |from: f64, to: f64| {
-        let rows: Vec<usize> = (0..s.len())
-            .filter(|&i| s.times[i] >= from && s.times[i] <= to)
-            .collect();
-        rows.iter().map(|&i| speed(i)).sum::<f64>() / rows.len().max(1) as f64
-    };
-    let u = mean(t_end - window_s, t_end);
-    let first = mean(t_end - window_s, t_end - 0.5 * window_s);
-    let second = mean(t_end - 0.5 * window_s, t_end);
-    let rho = sc.fluid.density_kg_m3;
-    let d = 2.0 * radius;
-    let w = (g.density_kg_m3 - rho)
-        * g.gravity_m_s2[0].hypot(g.gravity_m_s2[1])
-        * std::f64::consts::PI
-        * radius
-        * radius;
-    r.insert(format!("{probe}.settling_velocity_m_s"), u);
-    r.insert(format!("{probe}.reynolds"), u * d / sc.fluid.viscosity_m2_s);
-    r.insert(
-        format!("{probe}.drag_coefficient"),
-        2.0 * w / (rho * u * u * d),
-    );
-    r.insert(format!("{probe}.velocity_drift"), (second - first) / second);
     Ok(())
 }
 

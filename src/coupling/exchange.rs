@@ -13,6 +13,7 @@ use super::{Refill, Scheme};
 use crate::lbm::collision::{equilibrium, Moments};
 use crate::lbm::d2q9::{CX, CY, OPP, Q, W};
 use crate::lbm::{Lattice, Real};
+use rayon::prelude::*;
 use thiserror::Error;
 
 /// A coupled step that cannot go on.
@@ -44,6 +45,53 @@ pub enum CouplingError {
     },
 }
 
+/// Most grains that can act on one cell in one step (links of a boundary cell, or grains
+/// overlapping a cell).
+const MAX_PER_CELL: usize = 8;
+
+/// One recomputed cell: its new populations (shifted), density, and the momentum it hands
+/// to each grain (fx, fy, torque; lattice units).
+#[derive(Debug, Clone, Copy)]
+struct CellUpdate {
+    cell: u32,
+    h: [f64; Q],
+    rho: f64,
+    n: u8,
+    links: [(u32, [f64; 3]); MAX_PER_CELL],
+}
+
+impl CellUpdate {
+    fn new(cell: u32) -> Self {
+        Self {
+            cell,
+            h: [0.0; Q],
+            rho: 1.0,
+            n: 0,
+            links: [(0, [0.0; 3]); MAX_PER_CELL],
+        }
+    }
+
+    /// Add grain g's share; shares of one grain are merged.
+    fn push(&mut self, g: u32, p: [f64; 3]) {
+        let n = self.n as usize;
+        if let Some(l) = self.links[..n].iter_mut().find(|l| l.0 == g) {
+            l.1[0] += p[0];
+            l.1[1] += p[1];
+            l.1[2] += p[2];
+        } else if n < MAX_PER_CELL {
+            self.links[n] = (g, p);
+            self.n += 1;
+        } else {
+            // More than eight grains on one cell cannot happen for disks at least three
+            // cells across; keep the momentum with the last one rather than lose it.
+            let l = &mut self.links[MAX_PER_CELL - 1].1;
+            l[0] += p[0];
+            l[1] += p[1];
+            l[2] += p[2];
+        }
+    }
+}
+
 /// Per-grain hydrodynamic force and torque of one step, lattice units (momentum per step;
 /// torque about the grain's centre, per step).
 pub type GrainForce = [f64; 3];
@@ -68,6 +116,12 @@ pub struct Coupler {
     shares: Vec<Share>,
     /// Whether each padded cell is plain fluid in the lattice.
     fluid: Vec<bool>,
+    /// Recomputed cells of the last exchange (kept for their allocation).
+    updates: Vec<CellUpdate>,
+    /// Rest populations of the covered cells (kept for their allocation).
+    rest: Vec<[f64; Q]>,
+    /// Share runs per cell (partially saturated method).
+    runs: Vec<(u32, u32)>,
     /// Force of the last exchange per grain.
     force: Vec<GrainForce>,
     /// Momentum handed over by covering and uncovering since the last exchange.
@@ -94,6 +148,9 @@ impl Coupler {
             next_owner: vec![NONE; cells],
             touched: Vec::new(),
             next_touched: Vec::new(),
+            updates: Vec::new(),
+            rest: Vec::new(),
+            runs: Vec::new(),
             boundary: Vec::new(),
             covered: Vec::new(),
             shares: Vec::new(),
@@ -232,85 +289,126 @@ impl Coupler {
         let plane = lat.plane();
         let interpolated = self.scheme == Scheme::Interpolated;
         let step = lat.steps_done();
-        let mut bad = None;
-        // Recompute each boundary cell from the previous buffer (read only), then write.
-        let mut out: Vec<(u32, [T; Q])> = Vec::with_capacity(self.boundary.len());
+        // Recompute each boundary cell from the previous buffer (read only, in parallel),
+        // then write them and sum the grains' forces in cell order (fixed, so the sums do
+        // not depend on the thread count).
+        let mut updates = std::mem::take(&mut self.updates);
         {
+            let (lat, owner) = (&*lat, &self.owner);
             let prev = lat.previous_buffer();
-            for &kb in &self.boundary {
-                let k = kb as usize;
-                let (x, y) = f.local(k);
-                let mut h = lat.gather_previous(x as usize, y as usize);
-                let centre = f.centre(k);
-                for i in 1..Q {
-                    let n = neighbour(&f, k, i, -1);
-                    let g = self.owner[n];
-                    if g == NONE {
-                        continue;
-                    }
-                    let grain = &grains[g as usize];
-                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                    let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
-                    let c = super::map::nearest_image(&f, grain, mid);
-                    let ub = rigid_velocity(&f, grain, mid);
-                    // Ladd 1994 moving-wall term 2 w_i ρ_w (c_i·u_b)/c_s², ρ_w = 1 (seed eq. 5.45).
-                    let ladd = 6.0 * W[i] * (cx * ub[0] + cy * ub[1]);
-                    let out_i = prev[OPP[i] * plane + k].to_f64();
-                    let hi = if interpolated {
-                        let q = super::geometry::link_fraction(centre, [-cx, -cy], c, grain.radius);
-                        let ff = neighbour(&f, k, i, 1);
-                        if q < 0.5 && lat.is_fluid_at(ff) && self.owner[ff] == NONE {
-                            // Bouzidi, Firdaouss & Lallemand 2001, eq. 5 (q < ½), moving wall.
-                            2.0 * q * out_i
-                                + (1.0 - 2.0 * q) * prev[OPP[i] * plane + ff].to_f64()
-                                + ladd
-                        } else if q >= 0.5 {
-                            // Bouzidi et al. 2001, eq. 5 (q ≥ ½).
-                            let same = prev[i * plane + k].to_f64();
-                            (out_i + (2.0 * q - 1.0) * same + ladd) / (2.0 * q)
+            self.boundary
+                .par_iter()
+                .with_min_len(64)
+                .map(|&kb| {
+                    let k = kb as usize;
+                    let (x, y) = f.local(k);
+                    let mut h = lat.gather_previous(x as usize, y as usize);
+                    let centre = f.centre(k);
+                    let mut u = CellUpdate::new(kb);
+                    for i in 1..Q {
+                        let n = neighbour(&f, k, i, -1);
+                        let g = owner[n];
+                        if g == NONE {
+                            continue;
+                        }
+                        let grain = &grains[g as usize];
+                        let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                        let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+                        let c = super::map::nearest_image(&f, grain, mid);
+                        let ub = GrainView {
+                            centre: c,
+                            ..*grain
+                        }
+                        .surface_velocity(mid);
+                        // Ladd 1994 moving-wall term 2 w_i ρ_w (c_i·u_b)/c_s², ρ_w = 1 (seed eq. 5.45).
+                        let ladd = 6.0 * W[i] * (cx * ub[0] + cy * ub[1]);
+                        let out_i = prev[OPP[i] * plane + k].to_f64();
+                        let hi = if interpolated {
+                            let q =
+                                super::geometry::link_fraction(centre, [-cx, -cy], c, grain.radius);
+                            let ff = neighbour(&f, k, i, 1);
+                            if q < 0.5 && lat.is_fluid_at(ff) && owner[ff] == NONE {
+                                // Bouzidi, Firdaouss & Lallemand 2001, eq. 5 (q < ½), moving wall.
+                                2.0 * q * out_i
+                                    + (1.0 - 2.0 * q) * prev[OPP[i] * plane + ff].to_f64()
+                                    + ladd
+                            } else if q >= 0.5 {
+                                // Bouzidi et al. 2001, eq. 5 (q ≥ ½).
+                                let same = prev[i * plane + k].to_f64();
+                                (out_i + (2.0 * q - 1.0) * same + ladd) / (2.0 * q)
+                            } else {
+                                out_i + ladd
+                            }
                         } else {
                             out_i + ladd
-                        }
-                    } else {
-                        out_i + ladd
-                    };
-                    h[i] = T::from_f64(hi);
-                    // The grain receives −(f*_ī + f_i) c_i (seed eq. 5.47), torque about its
-                    // centre at the link's midpoint (eq. 5.48).
-                    let m = out_i + h[i].to_f64();
-                    let (px, py) = (-m * cx, -m * cy);
-                    let r = [mid[0] - c[0], mid[1] - c[1]];
-                    let acc = &mut self.force[g as usize];
-                    acc[0] += px;
-                    acc[1] += py;
-                    acc[2] += r[0] * py - r[1] * px;
-                }
-                let m = lat.collide_one(&mut h);
-                if !(m.rho.to_f64() > 0.0) && bad.is_none() {
-                    bad = Some((k, m.rho.to_f64()));
-                }
-                out.push((kb, h));
-            }
+                        };
+                        h[i] = T::from_f64(hi);
+                        // The grain receives −(f*_ī + f_i) c_i (seed eq. 5.47), torque about
+                        // its centre at the link's midpoint (eq. 5.48).
+                        let m = out_i + h[i].to_f64();
+                        let (px, py) = (-m * cx, -m * cy);
+                        let r = [mid[0] - c[0], mid[1] - c[1]];
+                        u.push(g, [px, py, r[0] * py - r[1] * px]);
+                    }
+                    let m = lat.collide_one(&mut h);
+                    u.rho = m.rho.to_f64();
+                    u.h = h.map(|v| v.to_f64());
+                    u
+                })
+                .collect_into_vec(&mut updates);
         }
-        let owner = &self.owner;
-        let buf = lat.current_buffer_mut();
-        for (k, h) in &out {
-            for i in 0..Q {
-                buf[i * plane + *k as usize] = h[i];
-            }
-        }
+        let bad = self.apply(lat, &updates);
+        self.updates = updates;
         // The fluid under a grain rests at its velocity (read by nothing but the refill).
-        for &k in &self.covered {
-            let g = &grains[owner[k as usize] as usize];
-            let eq = rest_at::<T>(rigid_velocity(&f, g, f.centre(k as usize)));
+        let owner = &self.owner;
+        let mut rest = std::mem::take(&mut self.rest);
+        self.covered
+            .par_iter()
+            .with_min_len(256)
+            .map(|&k| {
+                let g = &grains[owner[k as usize] as usize];
+                rest_at::<f64>(rigid_velocity(&f, g, f.centre(k as usize)))
+            })
+            .collect_into_vec(&mut rest);
+        let buf = lat.current_buffer_mut();
+        for (&k, eq) in self.covered.iter().zip(&rest) {
             for i in 0..Q {
-                buf[i * plane + k as usize] = eq[i];
+                buf[i * plane + k as usize] = T::from_f64(eq[i]);
             }
         }
+        self.rest = rest;
         if let Some((k, density)) = bad {
             return Err(self.unstable(step, k, density, grains, ids));
         }
         Ok(())
+    }
+
+    /// Write recomputed cells and add their momentum to the grains, in list order. Returns
+    /// the first cell whose density is NaN or non-positive.
+    fn apply<T: Real>(
+        &mut self,
+        lat: &mut Lattice<T>,
+        updates: &[CellUpdate],
+    ) -> Option<(usize, f64)> {
+        let plane = lat.plane();
+        let buf = lat.current_buffer_mut();
+        let mut bad = None;
+        for u in updates {
+            let k = u.cell as usize;
+            for i in 0..Q {
+                buf[i * plane + k] = T::from_f64(u.h[i]);
+            }
+            for &(g, p) in &u.links[..u.n as usize] {
+                let acc = &mut self.force[g as usize];
+                acc[0] += p[0];
+                acc[1] += p[1];
+                acc[2] += p[2];
+            }
+            if !(u.rho > 0.0) && bad.is_none() {
+                bad = Some((k, u.rho));
+            }
+        }
+        bad
     }
 
     fn exchange_psm<T: Real>(
@@ -320,74 +418,82 @@ impl Coupler {
         ids: &[u64],
     ) -> Result<(), CouplingError> {
         let f = self.frame;
-        let plane = lat.plane();
         let tau = lat.tau0();
         let step = lat.steps_done();
-        let mut bad = None;
-        let mut out: Vec<(u32, [T; Q])> = Vec::new();
+        // Runs of shares that belong to one cell.
+        self.runs.clear();
         let mut a = 0;
         while a < self.shares.len() {
-            let k = self.shares[a].cell as usize;
+            let k = self.shares[a].cell;
             let mut b = a;
-            while b < self.shares.len() && self.shares[b].cell as usize == k {
+            while b < self.shares.len() && self.shares[b].cell == k {
                 b += 1;
             }
-            let (x, y) = f.local(k);
-            let h = lat.gather_previous(x as usize, y as usize);
-            let mut post = h;
-            let m = lat.collide_one(&mut post);
-            let m64 = Moments {
-                drho: m.drho.to_f64(),
-                rho: m.rho.to_f64(),
-                ux: m.ux.to_f64(),
-                uy: m.uy.to_f64(),
-            };
-            let eq_fluid = equilibrium(&m64);
-            let hf: [f64; Q] = std::array::from_fn(|i| h[i].to_f64());
-            let eps: f64 = self.shares[a..b].iter().map(|s| s.fraction).sum();
-            let eps_c = eps.min(1.0);
-            // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
-            let b_total = eps_c * (tau - 0.5) / ((1.0 - eps_c) + (tau - 0.5));
-            let mut result: [f64; Q] = std::array::from_fn(|i| (1.0 - b_total) * post[i].to_f64());
-            let centre = f.centre(k);
-            for s in &self.shares[a..b] {
-                let grain = &grains[s.grain as usize];
-                let bg = b_total * s.fraction / eps;
-                let us = rigid_velocity(&f, grain, centre);
-                let eq_solid = equilibrium(&Moments {
-                    ux: us[0],
-                    uy: us[1],
-                    ..m64
-                });
-                let mut p = [0.0; 2];
-                for i in 0..Q {
-                    let j = OPP[i];
-                    // Noble & Torczynski 1998, eq. 8: Ω^s_i = [f_ī − f^eq_ī(ρ, u)] − [f_i − f^eq_i(ρ, u_s)].
-                    let omega_s = (hf[j] - eq_fluid[j]) - (hf[i] - eq_solid[i]);
-                    result[i] += bg * (hf[i] + omega_s);
-                    p[0] += bg * omega_s * CX[i] as f64;
-                    p[1] += bg * omega_s * CY[i] as f64;
-                }
-                // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
-                let r = [centre[0] - s.centre[0], centre[1] - s.centre[1]];
-                let acc = &mut self.force[s.grain as usize];
-                acc[0] -= p[0];
-                acc[1] -= p[1];
-                acc[2] -= r[0] * p[1] - r[1] * p[0];
-            }
-            let rho = 1.0 + result.iter().sum::<f64>();
-            if !(rho > 0.0) && bad.is_none() {
-                bad = Some((k, rho));
-            }
-            out.push((k as u32, result.map(T::from_f64)));
+            self.runs.push((a as u32, b as u32));
             a = b;
         }
-        let buf = lat.current_buffer_mut();
-        for (k, h) in &out {
-            for i in 0..Q {
-                buf[i * plane + *k as usize] = h[i];
-            }
+        let mut updates = std::mem::take(&mut self.updates);
+        {
+            let (lat, shares) = (&*lat, &self.shares);
+            self.runs
+                .par_iter()
+                .with_min_len(64)
+                .map(|&(a, b)| {
+                    let run = &shares[a as usize..b as usize];
+                    let k = run[0].cell as usize;
+                    let (x, y) = f.local(k);
+                    let h = lat.gather_previous(x as usize, y as usize);
+                    let mut post = h;
+                    let m = lat.collide_one(&mut post);
+                    let m64 = Moments {
+                        drho: m.drho.to_f64(),
+                        rho: m.rho.to_f64(),
+                        ux: m.ux.to_f64(),
+                        uy: m.uy.to_f64(),
+                    };
+                    let eq_fluid = equilibrium(&m64);
+                    let hf: [f64; Q] = std::array::from_fn(|i| h[i].to_f64());
+                    let eps: f64 = run.iter().map(|s| s.fraction).sum();
+                    let eps_c = eps.min(1.0);
+                    // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
+                    let b_total = eps_c * (tau - 0.5) / ((1.0 - eps_c) + (tau - 0.5));
+                    let mut u = CellUpdate::new(k as u32);
+                    u.h = std::array::from_fn(|i| (1.0 - b_total) * post[i].to_f64());
+                    let centre = f.centre(k);
+                    for s in run {
+                        let grain = &grains[s.grain as usize];
+                        let bg = b_total * s.fraction / eps;
+                        let us = GrainView {
+                            centre: s.centre,
+                            ..*grain
+                        }
+                        .surface_velocity(centre);
+                        let eq_solid = equilibrium(&Moments {
+                            ux: us[0],
+                            uy: us[1],
+                            ..m64
+                        });
+                        let mut p = [0.0; 2];
+                        for i in 0..Q {
+                            let j = OPP[i];
+                            // Noble & Torczynski 1998, eq. 8:
+                            // Ω^s_i = [f_ī − f^eq_ī(ρ, u)] − [f_i − f^eq_i(ρ, u_s)].
+                            let omega_s = (hf[j] - eq_fluid[j]) - (hf[i] - eq_solid[i]);
+                            u.h[i] += bg * (hf[i] + omega_s);
+                            p[0] += bg * omega_s * CX[i] as f64;
+                            p[1] += bg * omega_s * CY[i] as f64;
+                        }
+                        // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
+                        let r = [centre[0] - s.centre[0], centre[1] - s.centre[1]];
+                        u.push(s.grain, [-p[0], -p[1], -(r[0] * p[1] - r[1] * p[0])]);
+                    }
+                    u.rho = 1.0 + u.h.iter().sum::<f64>();
+                    u
+                })
+                .collect_into_vec(&mut updates);
         }
+        let bad = self.apply(lat, &updates);
+        self.updates = updates;
         if let Some((k, density)) = bad {
             return Err(self.unstable(step, k, density, grains, ids));
         }

@@ -491,6 +491,18 @@ pub enum Analysis {
         /// Averaging window at the end of the run (s).
         average_last_s: f64,
     },
+    /// Draft, kiss and tumble of two grains from their probes (`dkt.kiss_time`, … in units
+    /// of √(D/g); see `analysis::sedimentation::draft_kiss_tumble`).
+    DraftKissTumble {
+        /// Grain probe of the grain that starts below.
+        lower: String,
+        /// Grain probe of the grain that starts above.
+        upper: String,
+        /// Gap between the surfaces (m) that counts as touching (about a lattice cell).
+        contact_gap_m: f64,
+        /// Window for the final speeds (s).
+        average_last_s: f64,
+    },
     /// Momentum of fluid plus grains: `momentum.relative_drift` = |p_end − p_0| / |p_0|
     /// (needs non-zero initial momentum), and `momentum.grains_x_kg_m_s` etc.
     MomentumBalance,

@@ -476,6 +476,29 @@ fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(), SceneErr
                     "the averaging window",
                 )?;
             }
+            Analysis::DraftKissTumble {
+                lower,
+                upper,
+                contact_gap_m,
+                average_last_s,
+            } => {
+                for p in [lower, upper] {
+                    if !matches!(probe_kind(p), Some(Probe::Grain { .. })) {
+                        return Err(ctx.err(
+                            "lower",
+                            0,
+                            format!("draft-kiss-tumble needs a grain probe named `{p}`"),
+                        ));
+                    }
+                }
+                positive(ctx, "contact_gap_m", *contact_gap_m, "the contact gap")?;
+                positive(
+                    ctx,
+                    "average_last_s",
+                    *average_last_s,
+                    "the averaging window",
+                )?;
+            }
             Analysis::MomentumBalance if s.grains.is_none() => {
                 return Err(ctx.err(
                     "kind",

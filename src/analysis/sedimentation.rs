@@ -1,0 +1,142 @@
+//! Sedimentation: terminal settling of one grain, and the draft–kiss–tumble of two, from
+//! grain probes (columns x, y, vx, vy, ω, fx, fy).
+
+use super::signals::find;
+use super::{err, AnalysisError, Inputs, Results};
+use crate::io::probes::Series;
+
+/// Radius (m) of the grain a probe follows.
+fn probe_radius(inp: &Inputs, probe: &str, analysis: &str) -> Result<f64, AnalysisError> {
+    let id = inp
+        .scene
+        .scene
+        .probes
+        .iter()
+        .find_map(|p| match p {
+            crate::scene::Probe::Grain { name, id } if name == probe => Some(*id),
+            _ => None,
+        })
+        .ok_or_else(|| err(analysis, format!("`{probe}` is not a grain probe")))?;
+    inp.grain_radius
+        .iter()
+        .find(|(i, _)| *i == id)
+        .map(|(_, r)| *r)
+        .ok_or_else(|| err(analysis, format!("no grain with id {id}")))
+}
+
+/// Terminal settling of a grain from its probe (columns x, y, vx, vy, …), averaged over the
+/// last `window_s`: speed U, Re = U d / ν and C_D = 2 W / (ρ U² d) with W = (ρ_s − ρ) |g| π r²
+/// the submerged weight per metre of depth (2-D disk: U_t = √(π g d (ρ_s/ρ − 1) / (2 C_D))).
+pub fn settling(
+    inp: &Inputs,
+    probe: &str,
+    window_s: f64,
+    r: &mut Results,
+) -> Result<(), AnalysisError> {
+    let s = find(inp, probe, "settling")?;
+    let sc = &inp.scene.scene;
+    let (Some(g), Some(crate::scene::Probe::Grain { id, .. })) =
+        (&sc.grains, sc.probes.iter().find(|p| p.name() == probe))
+    else {
+        return Err(err("settling", "needs a grain probe and grains"));
+    };
+    let radius = inp
+        .grain_radius
+        .iter()
+        .find(|(i, _)| i == id)
+        .map(|(_, r)| *r)
+        .ok_or_else(|| err("settling", format!("no grain with id {id}")))?;
+    let t_end = *s.times.last().expect("non-empty");
+    let speed = |i: usize| {
+        let row = &s.values[i * s.columns.len()..(i + 1) * s.columns.len()];
+        row[2].hypot(row[3])
+    };
+    let mean = |from: f64, to: f64| {
+        let rows: Vec<usize> = (0..s.len())
+            .filter(|&i| s.times[i] >= from && s.times[i] <= to)
+            .collect();
+        rows.iter().map(|&i| speed(i)).sum::<f64>() / rows.len().max(1) as f64
+    };
+    let u = mean(t_end - window_s, t_end);
+    let first = mean(t_end - window_s, t_end - 0.5 * window_s);
+    let second = mean(t_end - 0.5 * window_s, t_end);
+    let rho = sc.fluid.density_kg_m3;
+    let d = 2.0 * radius;
+    let w = (g.density_kg_m3 - rho)
+        * g.gravity_m_s2[0].hypot(g.gravity_m_s2[1])
+        * std::f64::consts::PI
+        * radius
+        * radius;
+    r.insert(format!("{probe}.settling_velocity_m_s"), u);
+    r.insert(format!("{probe}.reynolds"), u * d / sc.fluid.viscosity_m2_s);
+    r.insert(
+        format!("{probe}.drag_coefficient"),
+        2.0 * w / (rho * u * u * d),
+    );
+    r.insert(format!("{probe}.velocity_drift"), (second - first) / second);
+    Ok(())
+}
+
+/// Draft, kiss and tumble of two grains (Fortes et al. 1987; seed §5.4.1), from the probes
+/// of the grain that starts below (`lower`) and above (`upper`). Times are in units of
+/// √(D/g). Results `dkt.*`:
+/// - `kiss_time`: the first time the gap between the surfaces falls below `contact_gap_m`;
+/// - `min_gap`: the smallest gap over D;
+/// - `tumble_time`: the first time after the kiss that the upper grain's centre passes
+///   below the lower one's (the pair has turned);
+/// - `separation_time`: the first time after the tumble that the gap exceeds D/2;
+/// - `draft` (1 when the upper grain falls faster than the lower before the kiss, else 0),
+///   `tumbled`, `separated` (1 or 0);
+/// - `lower_velocity_m_s`, `upper_velocity_m_s`: their speeds averaged over the last
+///   `average_last_s`.
+pub fn draft_kiss_tumble(
+    inp: &Inputs,
+    lower: &str,
+    upper: &str,
+    contact_gap_m: f64,
+    window_s: f64,
+    r: &mut Results,
+) -> Result<(), AnalysisError> {
+    let a = find(inp, lower, "draft-kiss-tumble")?;
+    let b = find(inp, upper, "draft-kiss-tumble")?;
+    let (ra, rb) = (
+        probe_radius(inp, lower, "draft-kiss-tumble")?,
+        probe_radius(inp, upper, "draft-kiss-tumble")?,
+    );
+    let Some(g) = &inp.scene.scene.grains else {
+        return Err(err("draft-kiss-tumble", "needs grains"));
+    };
+    let d = ra + rb;
+    let t_unit = (d / g.gravity_m_s2[0].hypot(g.gravity_m_s2[1])).sqrt();
+    let n = a.len().min(b.len());
+    let col = |s: &Series, i: usize, c: usize| s.values[i * s.columns.len() + c];
+    let gap = |i: usize| {
+        let (dx, dy) = (col(b, i, 0) - col(a, i, 0), col(b, i, 1) - col(a, i, 1));
+        dx.hypot(dy) - ra - rb
+    };
+    let kiss = (0..n).find(|&i| gap(i) < contact_gap_m);
+    let min_gap = (0..n).map(gap).fold(f64::INFINITY, f64::min) / d;
+    let draft = kiss.is_some_and(|k| (0..k).any(|i| col(b, i, 3) < col(a, i, 3)));
+    let tumble = kiss.and_then(|k| (k..n).find(|&i| col(b, i, 1) < col(a, i, 1)));
+    let separate = tumble.and_then(|t| (t..n).find(|&i| gap(i) > 0.5 * d));
+    let time = |i: Option<usize>| i.map(|i| a.times[i] / t_unit).unwrap_or(f64::NAN);
+    let flag = |i: Option<usize>| i.map(|_| 1.0).unwrap_or(0.0);
+    let t_end = a.times[n - 1];
+    let mean_speed = |s: &Series| {
+        let rows: Vec<usize> = (0..n).filter(|&i| s.times[i] >= t_end - window_s).collect();
+        rows.iter()
+            .map(|&i| col(s, i, 2).hypot(col(s, i, 3)))
+            .sum::<f64>()
+            / rows.len().max(1) as f64
+    };
+    r.insert("dkt.kiss_time".into(), time(kiss));
+    r.insert("dkt.min_gap".into(), min_gap);
+    r.insert("dkt.tumble_time".into(), time(tumble));
+    r.insert("dkt.separation_time".into(), time(separate));
+    r.insert("dkt.draft".into(), draft as u8 as f64);
+    r.insert("dkt.tumbled".into(), flag(tumble));
+    r.insert("dkt.separated".into(), flag(separate));
+    r.insert("dkt.lower_velocity_m_s".into(), mean_speed(a));
+    r.insert("dkt.upper_velocity_m_s".into(), mean_speed(b));
+    Ok(())
+}
