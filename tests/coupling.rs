@@ -281,3 +281,44 @@ fn two_disks_draft_kiss_and_tumble() {
     let (kiss, tumble) = (result(&s, "dkt.kiss_time"), result(&s, "dkt.tumble_time"));
     assert!(kiss < tumble && tumble <= result(&s, "dkt.separation_time"));
 }
+
+/// A coupled run writes the grains beside the fluid (grains.h5 + grains.xdmf at the same
+/// snapshot times) and draws them into the pictures.
+#[test]
+fn coupled_output_has_fluid_and_grains() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = momentum_box("psm").replace(
+        "steps = 10000\noutput_every = 0",
+        "steps = 200\noutput_every = 100",
+    );
+    let (s, out) = run_text(&text, dir.path(), None);
+    assert_eq!(s.status, Status::Ok, "{:?}", s.error);
+    let d = out.path();
+    let g = hdf5::File::open(d.join("grains.h5")).unwrap();
+    for step in ["step_00000000", "step_00000100", "step_00000200"] {
+        let pos = g.dataset(&format!("{step}/position")).unwrap();
+        assert_eq!(pos.shape(), vec![2, 3], "{step}");
+        assert!(hdf5::File::open(d.join("fields.h5"))
+            .unwrap()
+            .dataset(&format!("{step}/velocity"))
+            .is_ok());
+    }
+    let xdmf = std::fs::read_to_string(d.join("grains.xdmf")).unwrap();
+    assert!(xdmf.contains("grains.h5:/step_00000200/position"));
+    // The speed picture shows the grains as solid grey disks.
+    let png = std::fs::read(d.join("pictures/speed_00000200.png")).unwrap();
+    let decoder = png::Decoder::new(std::io::Cursor::new(png));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let grey = buf[..info.buffer_size()]
+        .chunks(3)
+        .filter(|p| p == &[110, 110, 110])
+        .count();
+    // Two disks of radius 5 and 4 cells, drawn 8× enlarged: about π(25 + 16)·64 pixels.
+    let expected = std::f64::consts::PI * 41.0 * 64.0;
+    assert!(
+        (grey as f64 - expected).abs() < 0.15 * expected,
+        "{grey} grey pixels, expected about {expected:.0}"
+    );
+}

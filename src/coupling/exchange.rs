@@ -49,6 +49,14 @@ pub enum CouplingError {
 /// overlapping a cell).
 const MAX_PER_CELL: usize = 8;
 
+/// The shares (indices into the share list) of one cell, in grain order.
+#[derive(Debug, Clone, Copy)]
+struct ShareRun {
+    cell: u32,
+    shares: [u32; MAX_PER_CELL],
+    n: u8,
+}
+
 /// One recomputed cell: its new populations (shifted), density, and the momentum it hands
 /// to each grain (fx, fy, torque; lattice units).
 #[derive(Debug, Clone, Copy)]
@@ -105,7 +113,7 @@ pub struct Coupler {
     owner: Vec<u32>,
     /// The map being built for the next step (kept for its allocation).
     next_owner: Vec<u32>,
-    /// Cells (padded, halo included) set in `owner` and in `next_owner`, sorted.
+    /// Cells (padded, halo included) set in `owner` and in `next_owner`.
     touched: Vec<u32>,
     next_touched: Vec<u32>,
     /// Interior exterior-fluid cells with at least one covered neighbour, increasing index.
@@ -120,8 +128,12 @@ pub struct Coupler {
     updates: Vec<CellUpdate>,
     /// Rest populations of the covered cells (kept for their allocation).
     rest: Vec<[f64; Q]>,
-    /// Share runs per cell (partially saturated method).
-    runs: Vec<(u32, u32)>,
+    /// The shares of each cell (partially saturated method): indices into `shares`.
+    runs: Vec<ShareRun>,
+    /// Per padded cell: its run in `runs`, or NONE (PSM), or whether it is listed in
+    /// `boundary` (bounce-back schemes).
+    run_of: Vec<u32>,
+    mark: Vec<bool>,
     /// Force of the last exchange per grain.
     force: Vec<GrainForce>,
     /// Momentum handed over by covering and uncovering since the last exchange.
@@ -151,6 +163,8 @@ impl Coupler {
             updates: Vec::new(),
             rest: Vec::new(),
             runs: Vec::new(),
+            run_of: vec![NONE; cells],
+            mark: vec![false; cells],
             boundary: Vec::new(),
             covered: Vec::new(),
             shares: Vec::new(),
@@ -234,6 +248,9 @@ impl Coupler {
 
     /// Covered and boundary cell lists from `owner`.
     fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>) {
+        for &k in &self.boundary {
+            self.mark[k as usize] = false;
+        }
         self.covered.clear();
         self.boundary.clear();
         if self.scheme == Scheme::Psm {
@@ -244,7 +261,8 @@ impl Coupler {
             let (x, y) = f.local(k);
             x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
         };
-        // Every boundary cell neighbours a covered cell (halo ones included).
+        // Every boundary cell neighbours a covered cell (halo ones included); each is listed
+        // once, in the order the covered cells were set (fixed).
         for &k in &self.touched {
             let k = k as usize;
             if interior(k) {
@@ -252,13 +270,12 @@ impl Coupler {
             }
             for i in 1..Q {
                 let n = neighbour(&f, k, i, 1);
-                if interior(n) && self.owner[n] == NONE && lat.is_fluid_at(n) {
+                if interior(n) && self.owner[n] == NONE && lat.is_fluid_at(n) && !self.mark[n] {
+                    self.mark[n] = true;
                     self.boundary.push(n as u32);
                 }
             }
         }
-        self.boundary.sort_unstable();
-        self.boundary.dedup();
     }
 
     /// Stage "coupling", fluid side: recompute the cells at the grains' surfaces in the
@@ -420,17 +437,26 @@ impl Coupler {
         let f = self.frame;
         let tau = lat.tau0();
         let step = lat.steps_done();
-        // Runs of shares that belong to one cell.
+        // Group the shares by cell, cells in order of first appearance (fixed).
         self.runs.clear();
-        let mut a = 0;
-        while a < self.shares.len() {
-            let k = self.shares[a].cell;
-            let mut b = a;
-            while b < self.shares.len() && self.shares[b].cell == k {
-                b += 1;
+        for (n, sh) in self.shares.iter().enumerate() {
+            let slot = &mut self.run_of[sh.cell as usize];
+            if *slot == NONE {
+                *slot = self.runs.len() as u32;
+                self.runs.push(ShareRun {
+                    cell: sh.cell,
+                    shares: [0; MAX_PER_CELL],
+                    n: 0,
+                });
             }
-            self.runs.push((a as u32, b as u32));
-            a = b;
+            let run = &mut self.runs[*slot as usize];
+            if (run.n as usize) < MAX_PER_CELL {
+                run.shares[run.n as usize] = n as u32;
+                run.n += 1;
+            }
+        }
+        for run in &self.runs {
+            self.run_of[run.cell as usize] = NONE;
         }
         let mut updates = std::mem::take(&mut self.updates);
         {
@@ -438,9 +464,11 @@ impl Coupler {
             self.runs
                 .par_iter()
                 .with_min_len(64)
-                .map(|&(a, b)| {
-                    let run = &shares[a as usize..b as usize];
-                    let k = run[0].cell as usize;
+                .map(|sr| {
+                    let k = sr.cell as usize;
+                    let run = sr.shares[..sr.n as usize]
+                        .iter()
+                        .map(|&n| &shares[n as usize]);
                     let (x, y) = f.local(k);
                     let h = lat.gather_previous(x as usize, y as usize);
                     let mut post = h;
@@ -453,7 +481,7 @@ impl Coupler {
                     };
                     let eq_fluid = equilibrium(&m64);
                     let hf: [f64; Q] = std::array::from_fn(|i| h[i].to_f64());
-                    let eps: f64 = run.iter().map(|s| s.fraction).sum();
+                    let eps: f64 = run.clone().map(|s| s.fraction).sum();
                     let eps_c = eps.min(1.0);
                     // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
                     let b_total = eps_c * (tau - 0.5) / ((1.0 - eps_c) + (tau - 0.5));
@@ -547,19 +575,21 @@ impl Coupler {
         let mut refills: Vec<(usize, [T; Q])> = Vec::new();
         {
             let buf = lat.current_buffer();
-            // Only cells covered before or after can change hands; each is visited once
-            // (the lists are sorted, so the order, and every sum, is fixed).
-            let mut changed: Vec<u32> = self
-                .covered
+            // Only cells covered before (uncovered now) or after (covered now) can change
+            // hands: a cell in both lists changes in at most one of them. The lists' order is
+            // fixed, so is every sum.
+            let interior = |k: &u32| {
+                let (x, y) = f.local(*k as usize);
+                x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
+            };
+            let (covered, touched) = (
+                std::mem::take(&mut self.covered),
+                std::mem::take(&mut self.next_touched),
+            );
+            let changed = covered
                 .iter()
-                .copied()
-                .chain(self.next_touched.iter().copied().filter(|&k| {
-                    let (x, y) = f.local(k as usize);
-                    x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
-                }))
-                .collect();
-            changed.sort_unstable();
-            changed.dedup();
+                .chain(touched.iter().filter(|k| interior(k)))
+                .copied();
             for k in changed {
                 let k = k as usize;
                 {
@@ -581,6 +611,8 @@ impl Coupler {
                     }
                 }
             }
+            self.covered = covered;
+            self.next_touched = touched;
         }
         let buf = lat.current_buffer_mut();
         for (k, h) in refills {

@@ -120,7 +120,8 @@ impl SlabFrame {
 /// on a tie). Only plain fluid cells of the lattice can be covered.
 ///
 /// `touched` holds, on entry, the cells this map set last time (they are cleared, so the
-/// cost follows the grains' area, not the lattice's); on exit, the cells set now, sorted.
+/// cost follows the grains' area, not the lattice's); on exit, the cells set now, grain by
+/// grain and row by row (a fixed order).
 pub fn cover(
     frame: &SlabFrame,
     grains: &[GrainView],
@@ -154,11 +155,14 @@ pub fn cover(
             });
         }
     }
-    touched.sort_unstable();
 }
 
 /// The image of grain `g` nearest to point `p`.
+#[inline]
 pub fn nearest_image(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] {
+    if !frame.periodic_x && !frame.periodic_y {
+        return g.centre;
+    }
     let mut best = g.centre;
     let mut bd = f64::INFINITY;
     for c in frame.images(g) {
@@ -184,8 +188,8 @@ pub struct Share {
     pub centre: [f64; 2],
 }
 
-/// Solid fractions of every interior plain-fluid cell a grain overlaps, sorted by cell and
-/// then grain (so every sum over them has a fixed order).
+/// Solid fractions of every interior plain-fluid cell a grain overlaps, grain by grain and
+/// row by row (a fixed order). Cells wholly inside or outside skip the exact area.
 pub fn shares(
     frame: &SlabFrame,
     grains: &[GrainView],
@@ -199,7 +203,19 @@ pub fn shares(
                 if x < 0 || y < 0 || x >= frame.nx as i64 || y >= frame.ny as i64 || !fluid(k) {
                     return;
                 }
-                let e = cell_fraction(c, grain.radius, x + frame.x0 as i64, y);
+                let (gx, r) = ((x + frame.x0 as i64) as f64, grain.radius);
+                // Nearest and farthest points of the cell from the centre.
+                let near = |lo: f64, v: f64| (v - lo.max(v.min(lo + 1.0))).abs();
+                let far = |lo: f64, v: f64| (v - lo).abs().max((v - lo - 1.0).abs());
+                let (nx_, ny_) = (near(gx, c[0]), near(y as f64, c[1]));
+                let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
+                let e = if fx_ * fx_ + fy_ * fy_ <= r * r {
+                    1.0
+                } else if nx_ * nx_ + ny_ * ny_ >= r * r {
+                    0.0
+                } else {
+                    cell_fraction(c, r, x + frame.x0 as i64, y)
+                };
                 if e > 0.0 {
                     out.push(Share {
                         cell: k as u32,
@@ -211,5 +227,4 @@ pub fn shares(
             });
         }
     }
-    out.sort_by_key(|s| (s.cell, s.grain));
 }
