@@ -94,7 +94,8 @@ pub enum AnyScene {
 }
 
 /// Read, parse and validate a scene of any kind: a `[grains]` table without `[fluid]` is a
-/// grains scene, an `[mpm]` table alone an MPM scene, anything else a fluid scene.
+/// grains scene, an `[mpm]` table alone an MPM scene, `[fluid]` with `[grains]` a coupled
+/// fluid scene, anything else a fluid scene.
 pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
         path: path.to_owned(),
@@ -123,6 +124,18 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
     }
     match (table.contains_key("grains"), table.contains_key("fluid")) {
         (true, false) => Ok(AnyScene::Grains(Box::new(parse_grains(&text, path)?))),
+        (true, true) => parse(&text, path)
+            .map(|s| AnyScene::Fluid(Box::new(s)))
+            .map_err(|e| match e {
+                SceneError::Parse { path, message } => SceneError::Parse {
+                    path,
+                    message: format!(
+                        "{message}\n(a scene with [fluid] and [grains] runs coupled: it needs \
+                         [domain], [fluid], [boundaries], [run], [grains] and [coupling])"
+                    ),
+                },
+                other => other,
+            }),
         _ => Ok(AnyScene::Fluid(Box::new(parse(&text, path)?))),
     }
 }
