@@ -122,7 +122,10 @@ fn bad_grains_scenes_name_the_field() {
         &["time step", "exceeds"],
     );
     // With [fluid] it is a coupled scene, which needs the fluid's tables and [coupling].
-    refused(&format!("{GOOD}[fluid]\n"), &["missing field", "runs coupled", "[coupling]"]);
+    refused(
+        &format!("{GOOD}[fluid]\n"),
+        &["missing field", "runs coupled", "[coupling]"],
+    );
     refused(
         &format!("{GOOD}[[analyses]]\nkind = \"column-collapse\"\nwall_x_m = 0.0\nfloor_y_m = 0.0\nfront_min_height_m = 0.005\n"),
         &["front_min_height_m", "MPM"],
