@@ -10,7 +10,7 @@ use crate::lbm::lattice::StepError;
 use crate::lbm::{FluidBackend, Lattice, Real};
 use crate::run::RunError;
 use crate::scene::{
-    build_lattice, solid_id_of, Backend, GpuStorage, Initial, Probe, SceneError, Units, ValidScene,
+    build_lattice, solid_id_of, Backend, GpuStorage, Initial, Probe, Units, ValidScene,
 };
 use decomposition::{Comm, Side, SlabHalo, SlabPartition};
 use std::sync::Arc;
@@ -119,12 +119,7 @@ impl<T: Real> Simulation<T> {
     ) -> Result<Self, RunError> {
         let built = build_lattice(scene)?;
         let units = scene.units;
-        let invalid = |key: &str, message: String| SceneError::Invalid {
-            path: scene.path.clone(),
-            line: None,
-            key: key.into(),
-            message,
-        };
+        let invalid = |key: &str, message: String| scene.invalid(key, message);
         let mut targets = Vec::new();
         let mut series = Vec::new();
         for p in &scene.scene.probes {

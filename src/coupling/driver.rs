@@ -8,7 +8,7 @@ use crate::lbm::lattice::{Face, FaceCondition};
 use crate::lbm::{Lattice, Real};
 use crate::run::RunError;
 use crate::scene::coupling::{grain_scene, MIN_CELLS_PER_DIAMETER};
-use crate::scene::{SceneError, Units, ValidScene};
+use crate::scene::{Units, ValidScene};
 use decomposition::Comm;
 
 /// Grains coupled to this rank's lattice.
@@ -54,12 +54,7 @@ impl LbmDem {
             _ => unreachable!("validated: grains and coupling come together"),
         };
         let units = scene.units;
-        let invalid = |key: &str, message: String| SceneError::Invalid {
-            path: scene.path.clone(),
-            line: None,
-            key: key.into(),
-            message,
-        };
+        let invalid = |key: &str, message: String| scene.invalid(key, message);
         let gs = grain_scene(s, spec, &scene.base_dir, &scene.path);
         let (grains, _) = crate::run_grains::sample::prepare(&gs, comm)?;
         let domain = gs.scene.region.max_m;

@@ -73,6 +73,19 @@ pub struct ValidScene {
     pub path: PathBuf,
 }
 
+impl ValidScene {
+    /// An error about `key` of this scene that only shows once the scene is being built
+    /// (no line: the key may stand for a sample or a file).
+    pub fn invalid(&self, key: &str, message: String) -> SceneError {
+        SceneError::Invalid {
+            path: self.path.clone(),
+            line: None,
+            key: key.into(),
+            message,
+        }
+    }
+}
+
 /// Read, parse and validate a scene file.
 pub fn load(path: &Path) -> Result<ValidScene, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
