@@ -47,29 +47,29 @@ pub enum CouplingError {
 
 /// Most grains that can act on one cell in one step (links of a boundary cell, or grains
 /// overlapping a cell).
-const MAX_PER_CELL: usize = 8;
+pub(super) const MAX_PER_CELL: usize = 8;
 
 /// The shares (indices into the share list) of one cell, in grain order.
 #[derive(Debug, Clone, Copy)]
-struct ShareRun {
-    cell: u32,
-    shares: [u32; MAX_PER_CELL],
-    n: u8,
+pub(super) struct ShareRun {
+    pub(super) cell: u32,
+    pub(super) shares: [u32; MAX_PER_CELL],
+    pub(super) n: u8,
 }
 
 /// One recomputed cell: its new populations (shifted), density, and the momentum it hands
 /// to each grain (fx, fy, torque; lattice units).
 #[derive(Debug, Clone, Copy)]
-struct CellUpdate {
-    cell: u32,
-    h: [f64; Q],
-    rho: f64,
-    n: u8,
-    links: [(u32, [f64; 3]); MAX_PER_CELL],
+pub(super) struct CellUpdate {
+    pub(super) cell: u32,
+    pub(super) h: [f64; Q],
+    pub(super) rho: f64,
+    pub(super) n: u8,
+    pub(super) links: [(u32, [f64; 3]); MAX_PER_CELL],
 }
 
 impl CellUpdate {
-    fn new(cell: u32) -> Self {
+    pub(super) fn new(cell: u32) -> Self {
         Self {
             cell,
             h: [0.0; Q],
@@ -80,7 +80,7 @@ impl CellUpdate {
     }
 
     /// Add grain g's share; shares of one grain are merged.
-    fn push(&mut self, g: u32, p: [f64; 3]) {
+    pub(super) fn push(&mut self, g: u32, p: [f64; 3]) {
         let n = self.n as usize;
         if let Some(l) = self.links[..n].iter_mut().find(|l| l.0 == g) {
             l.1[0] += p[0];
@@ -106,38 +106,38 @@ pub type GrainForce = [f64; 3];
 
 /// The coupling state of one slab.
 pub struct Coupler {
-    scheme: Scheme,
-    refill: Refill,
-    frame: SlabFrame,
+    pub(super) scheme: Scheme,
+    pub(super) refill: Refill,
+    pub(super) frame: SlabFrame,
     /// Covering grain per padded cell (bounce-back schemes).
-    owner: Vec<u32>,
+    pub(super) owner: Vec<u32>,
     /// The map being built for the next step (kept for its allocation).
-    next_owner: Vec<u32>,
+    pub(super) next_owner: Vec<u32>,
     /// Cells (padded, halo included) set in `owner` and in `next_owner`.
-    touched: Vec<u32>,
-    next_touched: Vec<u32>,
+    pub(super) touched: Vec<u32>,
+    pub(super) next_touched: Vec<u32>,
     /// Interior exterior-fluid cells with at least one covered neighbour, increasing index.
-    boundary: Vec<u32>,
+    pub(super) boundary: Vec<u32>,
     /// Interior covered cells, increasing index.
-    covered: Vec<u32>,
+    pub(super) covered: Vec<u32>,
     /// Solid fractions (partially saturated method).
-    shares: Vec<Share>,
+    pub(super) shares: Vec<Share>,
     /// Whether each padded cell is plain fluid in the lattice.
-    fluid: Vec<bool>,
+    pub(super) fluid: Vec<bool>,
     /// Recomputed cells of the last exchange (kept for their allocation).
-    updates: Vec<CellUpdate>,
+    pub(super) updates: Vec<CellUpdate>,
     /// Rest populations of the covered cells (kept for their allocation).
-    rest: Vec<[f64; Q]>,
+    pub(super) rest: Vec<[f64; Q]>,
     /// The shares of each cell (partially saturated method): indices into `shares`.
-    runs: Vec<ShareRun>,
+    pub(super) runs: Vec<ShareRun>,
     /// Per padded cell: its run in `runs`, or NONE (PSM), or whether it is listed in
     /// `boundary` (bounce-back schemes).
-    run_of: Vec<u32>,
-    mark: Vec<bool>,
+    pub(super) run_of: Vec<u32>,
+    pub(super) mark: Vec<bool>,
     /// Force of the last exchange per grain.
-    force: Vec<GrainForce>,
+    pub(super) force: Vec<GrainForce>,
     /// Momentum handed over by covering and uncovering since the last exchange.
-    handover: Vec<GrainForce>,
+    pub(super) handover: Vec<GrainForce>,
 }
 
 impl Coupler {
@@ -232,7 +232,7 @@ impl Coupler {
     }
 
     /// Build the next map (owners or shares) for the grains at their current positions.
-    fn map<T: Real>(&mut self, lat: &Lattice<T>, grains: &[GrainView]) {
+    pub(super) fn map<T: Real>(&mut self, lat: &Lattice<T>, grains: &[GrainView]) {
         let fluid = |k: usize| lat.is_fluid_at(k);
         match self.scheme {
             Scheme::Psm => shares(&self.frame, grains, fluid, &mut self.shares),
@@ -247,7 +247,7 @@ impl Coupler {
     }
 
     /// Covered and boundary cell lists from `owner`.
-    fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>) {
+    pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>) {
         for &k in &self.boundary {
             self.mark[k as usize] = false;
         }
@@ -402,7 +402,7 @@ impl Coupler {
 
     /// Write recomputed cells and add their momentum to the grains, in list order. Returns
     /// the first cell whose density is NaN or non-positive.
-    fn apply<T: Real>(
+    pub(super) fn apply<T: Real>(
         &mut self,
         lat: &mut Lattice<T>,
         updates: &[CellUpdate],
@@ -428,107 +428,7 @@ impl Coupler {
         bad
     }
 
-    fn exchange_psm<T: Real>(
-        &mut self,
-        lat: &mut Lattice<T>,
-        grains: &[GrainView],
-        ids: &[u64],
-    ) -> Result<(), CouplingError> {
-        let f = self.frame;
-        let tau = lat.tau0();
-        let step = lat.steps_done();
-        // Group the shares by cell, cells in order of first appearance (fixed).
-        self.runs.clear();
-        for (n, sh) in self.shares.iter().enumerate() {
-            let slot = &mut self.run_of[sh.cell as usize];
-            if *slot == NONE {
-                *slot = self.runs.len() as u32;
-                self.runs.push(ShareRun {
-                    cell: sh.cell,
-                    shares: [0; MAX_PER_CELL],
-                    n: 0,
-                });
-            }
-            let run = &mut self.runs[*slot as usize];
-            if (run.n as usize) < MAX_PER_CELL {
-                run.shares[run.n as usize] = n as u32;
-                run.n += 1;
-            }
-        }
-        for run in &self.runs {
-            self.run_of[run.cell as usize] = NONE;
-        }
-        let mut updates = std::mem::take(&mut self.updates);
-        {
-            let (lat, shares) = (&*lat, &self.shares);
-            self.runs
-                .par_iter()
-                .with_min_len(64)
-                .map(|sr| {
-                    let k = sr.cell as usize;
-                    let run = sr.shares[..sr.n as usize]
-                        .iter()
-                        .map(|&n| &shares[n as usize]);
-                    let (x, y) = f.local(k);
-                    let h = lat.gather_previous(x as usize, y as usize);
-                    let mut post = h;
-                    let m = lat.collide_one(&mut post);
-                    let m64 = Moments {
-                        drho: m.drho.to_f64(),
-                        rho: m.rho.to_f64(),
-                        ux: m.ux.to_f64(),
-                        uy: m.uy.to_f64(),
-                    };
-                    let eq_fluid = equilibrium(&m64);
-                    let hf: [f64; Q] = std::array::from_fn(|i| h[i].to_f64());
-                    let eps: f64 = run.clone().map(|s| s.fraction).sum();
-                    let eps_c = eps.min(1.0);
-                    // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
-                    let b_total = eps_c * (tau - 0.5) / ((1.0 - eps_c) + (tau - 0.5));
-                    let mut u = CellUpdate::new(k as u32);
-                    u.h = std::array::from_fn(|i| (1.0 - b_total) * post[i].to_f64());
-                    let centre = f.centre(k);
-                    for s in run {
-                        let grain = &grains[s.grain as usize];
-                        let bg = b_total * s.fraction / eps;
-                        let us = GrainView {
-                            centre: s.centre,
-                            ..*grain
-                        }
-                        .surface_velocity(centre);
-                        let eq_solid = equilibrium(&Moments {
-                            ux: us[0],
-                            uy: us[1],
-                            ..m64
-                        });
-                        let mut p = [0.0; 2];
-                        for i in 0..Q {
-                            let j = OPP[i];
-                            // Noble & Torczynski 1998, eq. 8:
-                            // Ω^s_i = [f_ī − f^eq_ī(ρ, u)] − [f_i − f^eq_i(ρ, u_s)].
-                            let omega_s = (hf[j] - eq_fluid[j]) - (hf[i] - eq_solid[i]);
-                            u.h[i] += bg * (hf[i] + omega_s);
-                            p[0] += bg * omega_s * CX[i] as f64;
-                            p[1] += bg * omega_s * CY[i] as f64;
-                        }
-                        // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
-                        let r = [centre[0] - s.centre[0], centre[1] - s.centre[1]];
-                        u.push(s.grain, [-p[0], -p[1], -(r[0] * p[1] - r[1] * p[0])]);
-                    }
-                    u.rho = 1.0 + u.h.iter().sum::<f64>();
-                    u
-                })
-                .collect_into_vec(&mut updates);
-        }
-        let bad = self.apply(lat, &updates);
-        self.updates = updates;
-        if let Some((k, density)) = bad {
-            return Err(self.unstable(step, k, density, grains, ids));
-        }
-        Ok(())
-    }
-
-    fn unstable(
+    pub(super) fn unstable(
         &self,
         step: u64,
         k: usize,
@@ -555,179 +455,23 @@ impl Coupler {
             density,
         }
     }
-
-    /// Stage "coupling", after the grains moved: map them again. A fluid cell that a grain
-    /// now covers hands its momentum to the grain; a cell a grain uncovers is refilled
-    /// (equilibrium at the surface velocity with its fluid neighbours' mean density, plus
-    /// their non-equilibrium part with [`Refill::Extrapolation`]) and its momentum is taken
-    /// from the grain. Both are added to the next step's force. Call before
-    /// [`Lattice::update_boundaries`].
-    pub fn remap<T: Real>(&mut self, lat: &mut Lattice<T>, grains: &[GrainView]) {
-        for h in &mut self.handover {
-            *h = [0.0; 3];
-        }
-        self.map(lat, grains);
-        if self.scheme == Scheme::Psm {
-            return;
-        }
-        let f = self.frame;
-        let plane = lat.plane();
-        let mut refills: Vec<(usize, [T; Q])> = Vec::new();
-        {
-            let buf = lat.current_buffer();
-            // Only cells covered before (uncovered now) or after (covered now) can change
-            // hands: a cell in both lists changes in at most one of them. The lists' order is
-            // fixed, so is every sum.
-            let interior = |k: &u32| {
-                let (x, y) = f.local(*k as usize);
-                x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
-            };
-            let (covered, touched) = (
-                std::mem::take(&mut self.covered),
-                std::mem::take(&mut self.next_touched),
-            );
-            let changed = covered
-                .iter()
-                .chain(touched.iter().filter(|k| interior(k)))
-                .copied();
-            for k in changed {
-                let k = k as usize;
-                {
-                    let (old, new) = (self.owner[k], self.next_owner[k]);
-                    if old == new {
-                        continue;
-                    }
-                    let p = f.centre(k);
-                    if old == NONE {
-                        // Covered: the grain takes the cell's momentum (Aidun, Lu & Ding 1998).
-                        let j = momentum(buf, plane, k);
-                        self.hand(new, grains, p, j, 1.0);
-                    } else if new == NONE {
-                        let g = &grains[old as usize];
-                        let h = self.refill_cell(buf, plane, k, g, p);
-                        let j = momentum(&h, 1, 0);
-                        self.hand(old, grains, p, j, -1.0);
-                        refills.push((k, h));
-                    }
-                }
-            }
-            self.covered = covered;
-            self.next_touched = touched;
-        }
-        let buf = lat.current_buffer_mut();
-        for (k, h) in refills {
-            for i in 0..Q {
-                buf[i * plane + k] = h[i];
-            }
-        }
-        std::mem::swap(&mut self.owner, &mut self.next_owner);
-        std::mem::swap(&mut self.touched, &mut self.next_touched);
-        self.rebuild_lists(lat);
-    }
-
-    /// Add `sign · j` (momentum at point p) to grain g's handover.
-    fn hand(&mut self, g: u32, grains: &[GrainView], p: [f64; 2], j: [f64; 2], sign: f64) {
-        let c = super::map::nearest_image(&self.frame, &grains[g as usize], p);
-        let r = [p[0] - c[0], p[1] - c[1]];
-        let h = &mut self.handover[g as usize];
-        h[0] += sign * j[0];
-        h[1] += sign * j[1];
-        h[2] += sign * (r[0] * j[1] - r[1] * j[0]);
-    }
-
-    /// Populations for a cell that grain `g` has just uncovered.
-    fn refill_cell<T: Real>(
-        &self,
-        buf: &[T],
-        plane: usize,
-        k: usize,
-        g: &GrainView,
-        p: [f64; 2],
-    ) -> [T; Q] {
-        let f = self.frame;
-        let u = rigid_velocity(&f, g, p);
-        let mut rho_sum = 0.0;
-        let mut n = 0;
-        let c = super::map::nearest_image(&f, g, p);
-        let normal = [p[0] - c[0], p[1] - c[1]];
-        let mut along: Option<(f64, usize)> = None;
-        let (x, y) = f.local(k);
-        for i in 1..Q {
-            let (xm, ym) = (x + CX[i] as i64, y + CY[i] as i64);
-            let m = neighbour(&f, k, i, 1);
-            let interior = xm >= 0 && ym >= 0 && xm < f.nx as i64 && ym < f.ny as i64;
-            if !interior || !self.fluid[m] || !self.is_exterior_fluid(m) {
-                continue;
-            }
-            rho_sum += 1.0 + (0..Q).map(|j| buf[j * plane + m].to_f64()).sum::<f64>();
-            n += 1;
-            let dot = (CX[i] as f64 * normal[0] + CY[i] as f64 * normal[1])
-                / ((CX[i] * CX[i] + CY[i] * CY[i]) as f64).sqrt();
-            if along.is_none_or(|(d, _)| dot > d) {
-                along = Some((dot, m));
-            }
-        }
-        let rho = if n > 0 { rho_sum / n as f64 } else { 1.0 };
-        let eq = equilibrium(&Moments {
-            drho: rho - 1.0,
-            rho,
-            ux: u[0],
-            uy: u[1],
-        });
-        let mut h = eq;
-        if let (Refill::Extrapolation, Some((_, m))) = (self.refill, along) {
-            // Caiazzo 2005: f = f^eq(ρ̄, u_s) + f^neq of the fluid neighbour along the normal.
-            let hm: [f64; Q] = std::array::from_fn(|j| buf[j * plane + m].to_f64());
-            let eq_m = equilibrium(&moments_of(&hm));
-            for j in 0..Q {
-                h[j] += hm[j] - eq_m[j];
-            }
-        }
-        h.map(T::from_f64)
-    }
-
-    /// Whether padded cell `k` is fluid that no grain covers (under the map being built).
-    fn is_exterior_fluid(&self, k: usize) -> bool {
-        self.next_owner[k] == NONE && self.owner[k] == NONE
-    }
-
-    /// Momentum of the fluid in the interior cells no grain covers (lattice units), summed
-    /// row by row: the fluid half of the momentum balance.
-    pub fn fluid_momentum<T: Real>(&self, lat: &Lattice<T>) -> [f64; 2] {
-        let f = self.frame;
-        let buf = lat.current_buffer();
-        let plane = lat.plane();
-        let mut total = [0.0; 2];
-        for y in 0..f.ny as i64 {
-            for x in 0..f.nx as i64 {
-                let k = f.padded(x, y);
-                if !lat.is_fluid_at(k) || (self.scheme != Scheme::Psm && self.owner[k] != NONE) {
-                    continue;
-                }
-                let j = momentum(buf, plane, k);
-                total[0] += j[0];
-                total[1] += j[1];
-            }
-        }
-        total
-    }
 }
 
 /// Velocity of grain `g`'s rigid motion at point `p`, about its image nearest to `p`.
 #[inline]
-fn rigid_velocity(f: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] {
+pub(super) fn rigid_velocity(f: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] {
     let c = super::map::nearest_image(f, g, p);
     GrainView { centre: c, ..*g }.surface_velocity(p)
 }
 
 /// Padded index of the neighbour of `k` at `sign · c_i`.
 #[inline]
-fn neighbour(f: &SlabFrame, k: usize, i: usize, sign: i64) -> usize {
+pub(super) fn neighbour(f: &SlabFrame, k: usize, i: usize, sign: i64) -> usize {
     (k as i64 + sign * (CX[i] as i64 + CY[i] as i64 * f.stride as i64)) as usize
 }
 
 /// Σ h_i c_i of padded cell `k`.
-fn momentum<T: Real>(buf: &[T], plane: usize, k: usize) -> [f64; 2] {
+pub(super) fn momentum<T: Real>(buf: &[T], plane: usize, k: usize) -> [f64; 2] {
     let mut j = [0.0; 2];
     for i in 1..Q {
         let h = buf[i * plane + k].to_f64();
@@ -738,7 +482,7 @@ fn momentum<T: Real>(buf: &[T], plane: usize, k: usize) -> [f64; 2] {
 }
 
 /// Density and velocity of shifted populations (no force correction).
-fn moments_of(h: &[f64; Q]) -> Moments<f64> {
+pub(super) fn moments_of(h: &[f64; Q]) -> Moments<f64> {
     let drho: f64 = h.iter().sum();
     let j = momentum(h, 1, 0);
     let rho = 1.0 + drho;
@@ -751,7 +495,7 @@ fn moments_of(h: &[f64; Q]) -> Moments<f64> {
 }
 
 /// Shifted equilibrium at ρ = 1 and velocity u.
-fn rest_at<T: Real>(u: [f64; 2]) -> [T; Q] {
+pub(super) fn rest_at<T: Real>(u: [f64; 2]) -> [T; Q] {
     equilibrium(&Moments {
         drho: 0.0,
         rho: 1.0,

@@ -14,8 +14,10 @@
 pub mod driver;
 pub mod exchange;
 pub mod geometry;
+mod handover;
 pub mod map;
 pub mod plan;
+mod psm;
 
 pub use driver::LbmDem;
 pub use exchange::{Coupler, CouplingError};
