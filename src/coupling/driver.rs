@@ -120,9 +120,7 @@ impl LbmDem {
             .collect();
         let frame = frame_of(lat);
         let n = dem.owned();
-        let coupler = Coupler::new(coupling.scheme, coupling.refill, frame, n, |k| {
-            lat.is_fluid_at(k)
-        });
+        let coupler = Coupler::new(coupling.scheme, coupling.refill, frame, n);
         let mut me = Self {
             dem,
             coupler,

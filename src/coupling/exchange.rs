@@ -122,8 +122,8 @@ pub struct Coupler {
     pub(super) covered: Vec<u32>,
     /// Solid fractions (partially saturated method).
     pub(super) shares: Vec<Share>,
-    /// Whether each padded cell is plain fluid in the lattice.
-    pub(super) fluid: Vec<bool>,
+    /// Cells refilled by the last remap (kept for its allocation).
+    pub(super) refills: Vec<(u32, [f64; Q])>,
     /// Recomputed cells of the last exchange (kept for their allocation).
     pub(super) updates: Vec<CellUpdate>,
     /// Rest populations of the covered cells (kept for their allocation).
@@ -141,18 +141,12 @@ pub struct Coupler {
 }
 
 impl Coupler {
-    /// A coupler for `grains` grains on the slab `frame`; `fluid(k)` says whether padded
-    /// cell k is plain fluid in the lattice. Place the grains with [`Coupler::start`].
-    pub fn new(
-        scheme: Scheme,
-        refill: Refill,
-        frame: SlabFrame,
-        grains: usize,
-        fluid: impl Fn(usize) -> bool,
-    ) -> Self {
+    /// A coupler for `grains` grains on the slab `frame`. Place the grains with
+    /// [`Coupler::start`].
+    pub fn new(scheme: Scheme, refill: Refill, frame: SlabFrame, grains: usize) -> Self {
         let cells = frame.stride * (frame.ny + 2);
         Self {
-            fluid: (0..cells).map(fluid).collect(),
+            refills: Vec::new(),
             scheme,
             refill,
             frame,

@@ -27,7 +27,8 @@ impl Coupler {
         }
         let f = self.frame;
         let plane = lat.plane();
-        let mut refills: Vec<(usize, [T; Q])> = Vec::new();
+        let mut refills = std::mem::take(&mut self.refills);
+        refills.clear();
         {
             let buf = lat.current_buffer();
             // Only cells covered before (uncovered now) or after (covered now) can change
@@ -59,10 +60,10 @@ impl Coupler {
                         self.hand(new, grains, p, j, 1.0);
                     } else if new == NONE {
                         let g = &grains[old as usize];
-                        let h = self.refill_cell(buf, plane, k, g, p);
+                        let h = self.refill_cell(buf, plane, k, g, p, |m| lat.is_fluid_at(m));
                         let j = momentum(&h, 1, 0);
                         self.hand(old, grains, p, j, -1.0);
-                        refills.push((k, h));
+                        refills.push((k as u32, h.map(|v| v.to_f64())));
                     }
                 }
             }
@@ -70,11 +71,12 @@ impl Coupler {
             self.next_touched = touched;
         }
         let buf = lat.current_buffer_mut();
-        for (k, h) in refills {
+        for (k, h) in &refills {
             for i in 0..Q {
-                buf[i * plane + k] = h[i];
+                buf[i * plane + *k as usize] = T::from_f64(h[i]);
             }
         }
+        self.refills = refills;
         std::mem::swap(&mut self.owner, &mut self.next_owner);
         std::mem::swap(&mut self.touched, &mut self.next_touched);
         self.rebuild_lists(lat);
@@ -98,6 +100,7 @@ impl Coupler {
         k: usize,
         g: &GrainView,
         p: [f64; 2],
+        fluid: impl Fn(usize) -> bool,
     ) -> [T; Q] {
         let f = self.frame;
         let u = rigid_velocity(&f, g, p);
@@ -111,7 +114,7 @@ impl Coupler {
             let (xm, ym) = (x + CX[i] as i64, y + CY[i] as i64);
             let m = neighbour(&f, k, i, 1);
             let interior = xm >= 0 && ym >= 0 && xm < f.nx as i64 && ym < f.ny as i64;
-            if !interior || !self.fluid[m] || !self.is_exterior_fluid(m) {
+            if !interior || !fluid(m) || !self.is_exterior_fluid(m) {
                 continue;
             }
             rho_sum += 1.0 + (0..Q).map(|j| buf[j * plane + m].to_f64()).sum::<f64>();
