@@ -296,31 +296,28 @@ fn run_typed<T: Real + hdf5::H5Type>(
         }
         .into());
     }
-    if scene.scene.grains.is_some()
-        && (opts.restart.is_some()
-            || run.checkpoint_every > 0
-            || run.checkpoint_at_end
-            || run.checkpoint_minutes > 0.0)
-    {
-        return Err(SceneError::Invalid {
-            path: scene.path.clone(),
-            line: None,
-            key: "checkpoint_every".into(),
-            message: "checkpoints of coupled fluid–grain runs are not written yet (the grains \
-                      would be lost): remove checkpoint_every, checkpoint_at_end, \
-                      checkpoint_minutes and --restart"
-                .into(),
+    // A coupled restart reads the grains before the simulation is built (they are not
+    // prepared again); the fluid follows below as for any run.
+    let (restored_grains, momentum_restored) = match (&opts.restart, &scene.scene.grains) {
+        (Some(path), Some(_)) => {
+            let walls = crate::coupling::driver::wall_count(scene)?;
+            let (r, m) = crate::io::coupled_checkpoint::read(path, comm, walls)?;
+            (Some(r), m)
         }
-        .into());
-    }
-    let mut sim = Simulation::<T>::new(scene, comm, backend, storage)?;
-    let momentum = |sim: &Simulation<T>| {
-        sim.grains.as_ref().map(|c| {
-            let (f, g) = c.momentum(sim.fluid.lattice());
+        _ => (None, None),
+    };
+    let mut sim = Simulation::<T>::new(scene, comm, backend, storage, restored_grains)?;
+    let momentum = |sim: &mut Simulation<T>| {
+        let Simulation { grains, fluid, .. } = sim;
+        grains.as_ref().map(|c| {
+            let (f, g) = c.momentum(fluid.as_mut(), comm);
             [f, g]
         })
     };
-    let momentum_initial = momentum(&sim);
+    let momentum_initial = match momentum_restored {
+        Some(m) => Some(m),
+        None => momentum(&mut sim),
+    };
     let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
     let checkpoint_path = opts.out_dir.join("checkpoint.h5");
     let mut totals_initial = None;
@@ -333,6 +330,15 @@ fn run_typed<T: Real + hdf5::H5Type>(
             (sim.fluid.lattice().x_offset(), sim.fluid.lattice().nx()),
             &sim.series,
         )?;
+        if r.grains && sim.grains.is_none() {
+            return Err(OutputError::Checkpoint {
+                path: path.clone(),
+                message: "holds grains, but this scene has none; restart the coupled scene \
+                          that wrote it"
+                    .into(),
+            }
+            .into());
+        }
         sim.restore(&r.populations, r.run.step, r.run.series);
         totals_initial = Some(Totals::from_array(r.run.totals_initial));
     }
@@ -387,7 +393,17 @@ fn run_typed<T: Real + hdf5::H5Type>(
             slab: (sim.fluid.lattice().x_offset(), sim.fluid.lattice().nx()),
             populations: &pops,
         };
-        let r = checkpoint::write(&checkpoint_path, comm, &lat, &state);
+        let r = match &sim.grains {
+            None => checkpoint::write(&checkpoint_path, comm, &lat, &state),
+            Some(c) => {
+                let grains = crate::io::coupled_checkpoint::CoupledState {
+                    dem: &c.dem,
+                    per_grain: c.per_grain_state(),
+                    momentum_initial,
+                };
+                crate::io::coupled_checkpoint::write(&checkpoint_path, comm, &lat, &state, &grains)
+            }
+        };
         sim.times.seconds[stage::CHECKPOINT] += t.elapsed().as_secs_f64();
         checkpoints.push(checkpoint_path.clone());
         r
@@ -431,7 +447,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         let due = (run.checkpoint_every > 0 && step % run.checkpoint_every == 0)
             || agreed != 0
             || (step == n && run.checkpoint_at_end);
-        if due && sim.grains.is_none() {
+        if due {
             if let Err(e) = sim.check(comm) {
                 error = Some(e.to_string());
                 break;
@@ -458,6 +474,11 @@ fn run_typed<T: Real + hdf5::H5Type>(
         out.snapshot(steps, &scene.units, &mut sim, comm, &fields)?;
     }
     let totals_final = sim.totals(comm, &fields);
+    let momentum_final = momentum(&mut sim);
+    let grain_radius = match &sim.grains {
+        Some(c) => c.radii(comm),
+        None => Vec::new(),
+    };
     let results = if error.is_none() && !interrupted && !scene.scene.analyses.is_empty() {
         let global = sim.gather_fields(comm, &fields);
         analysis::run_all(&analysis::Inputs {
@@ -466,15 +487,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
             steps,
             series: &sim.series,
             totals: (totals_initial, totals_final),
-            momentum: momentum_initial.zip(momentum(&sim)),
-            grain_radius: sim
-                .grains
-                .as_ref()
-                .map(|c| {
-                    let g = c.grains();
-                    g.id.iter().copied().zip(g.r.iter().copied()).collect()
-                })
-                .unwrap_or_default(),
+            momentum: momentum_initial.zip(momentum_final),
+            grain_radius: grain_radius.clone(),
         })?
     } else if error.is_none() && !interrupted {
         let mut r = Results::new();
@@ -490,7 +504,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let mut results = results;
     if let Some(c) = &sim.grains {
         results.insert("coupling.substeps".into(), c.substeps() as f64);
-        results.insert("coupling.grains".into(), c.grains().len() as f64);
+        results.insert("coupling.grains".into(), grain_radius.len() as f64);
     }
     let checks = evaluate(&scene.scene.checks, &results);
     let status = match (&error, interrupted, checks.iter().all(|c| c.passed)) {
@@ -628,6 +642,7 @@ impl Output {
                     dir,
                     comm,
                     resume_after,
+                    true,
                 )?),
                 None => None,
             },
@@ -673,7 +688,8 @@ impl Output {
         let t = Instant::now();
         self.h5.write(step, u.time_si(step), &data)?;
         if let (Some(w), Some(c)) = (&mut self.grains, &sim.grains) {
-            w.write(&c.dem, comm)?;
+            let hydro: Vec<[f64; 3]> = (0..c.system().owned()).map(|i| c.hydrodynamic(i)).collect();
+            w.write_at(c.system(), comm, step, &hydro)?;
         }
         self.write_s += t.elapsed().as_secs_f64();
         let cells = (sim.partition.columns() * f.ny) as u64;
@@ -687,24 +703,20 @@ impl Output {
             let mut slab = f.clone();
             slab.ux = speed_local;
             slab.uy = vorticity;
-            let g = sim.gather_fields(comm, &slab);
-            let grain_cells = sim.grains.as_ref().map(|c| {
-                // Grains drawn as solid where they cover at least half a cell (one rank).
+            if let Some(c) = &sim.grains {
+                // Grains drawn as solid where they cover at least half a cell.
                 let lat = sim.fluid.lattice();
                 let mut frac = vec![0.0; lat.plane()];
                 c.coupler().solid_fraction(&mut frac);
                 let (nx, ny) = (lat.nx(), lat.ny());
-                (0..ny * nx)
-                    .map(|k| frac[lat.padded_index((k % nx) as isize, (k / nx) as isize)] >= 0.5)
-                    .collect::<Vec<bool>>()
-            });
-            if self.root {
-                let mut solid: Vec<bool> = g.fluid.iter().map(|b| !b).collect();
-                if let Some(cells) = &grain_cells {
-                    for (s, &g) in solid.iter_mut().zip(cells) {
-                        *s |= g;
-                    }
+                for k in 0..ny * nx {
+                    let (x, y) = ((k % nx) as isize, (k / nx) as isize);
+                    slab.fluid[k] &= frac[lat.padded_index(x, y)] < 0.5;
                 }
+            }
+            let g = sim.gather_fields(comm, &slab);
+            if self.root {
+                let solid: Vec<bool> = g.fluid.iter().map(|b| !b).collect();
                 let (speed, vort) = (&g.ux, &g.uy);
                 let pics = self.dir.join("pictures");
                 let vmax = speed.iter().copied().fold(0.0, f64::max);

@@ -140,7 +140,8 @@ pub fn run_grains(
     };
     let n_total = d.global_count(comm);
     let region = (s.region.min_m, s.region.max_m);
-    let mut writer = GrainWriter::open(&opts.out_dir, comm, resume.as_ref().map(|r| r.step))?;
+    let mut writer =
+        GrainWriter::open(&opts.out_dir, comm, resume.as_ref().map(|r| r.step), false)?;
     let mut stage = [0.0f64; GRAIN_STAGES.len()];
     let picture = |d: &SlabDem, vmax: f64| -> Result<(), RunError> {
         let name = format!("grains_step_{:08}.png", d.system.steps);

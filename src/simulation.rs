@@ -116,6 +116,7 @@ impl<T: Real> Simulation<T> {
         comm: &dyn Comm,
         backend: Backend,
         storage: GpuStorage,
+        restored: Option<crate::coupling::RestoredCoupling>,
     ) -> Result<Self, RunError> {
         let built = build_lattice(scene)?;
         let units = scene.units;
@@ -205,53 +206,56 @@ impl<T: Real> Simulation<T> {
             }
         }
         lattice.update_boundaries();
-        let grains = if scene.scene.grains.is_some() {
-            if backend == Backend::Gpu {
-                return Err(invalid(
-                    "backend",
-                    "coupled fluid–grain runs use the CPU backend for now: run with \
-                     `--backend cpu` (or drop `backend = \"gpu\"` from [run])"
-                        .into(),
-                )
-                .into());
-            }
-            if comm.size() > 1 {
-                return Err(invalid(
-                    "grains",
-                    "coupled fluid–grain runs use one rank for now (the grains' slab \
-                     decomposition is not coupled yet): run without mpirun and give the cores \
-                     to rayon with --threads"
-                        .into(),
-                )
-                .into());
-            }
-            let c = LbmDem::new(scene, &mut lattice, comm)?;
-            for t in &targets {
-                if let ProbeTarget::Grain(id) = t {
-                    if !c.grains().id.contains(id) {
-                        return Err(invalid(
-                            "id",
-                            format!(
-                                "grain probe names grain {id}, but the sample has grains 0..{}",
-                                c.grains().len()
-                            ),
-                        )
-                        .into());
-                    }
-                }
-            }
-            lattice.update_boundaries();
-            Some(c)
-        } else {
-            None
-        };
-        let fluid: Box<dyn FluidBackend<T>> = match backend {
+        if scene.scene.grains.is_some() && backend == Backend::Gpu {
+            return Err(invalid(
+                "backend",
+                "coupled fluid–grain runs use the CPU backend for now: run with \
+                 `--backend cpu` (or drop `backend = \"gpu\"` from [run])"
+                    .into(),
+            )
+            .into());
+        }
+        let mut fluid: Box<dyn FluidBackend<T>> = match backend {
             Backend::Cpu => Box::new(lattice),
             Backend::Gpu => Box::new(GpuFluid::new(
                 lattice,
                 Arc::new(GpuContext::open()?),
                 storage,
             )?),
+        };
+        let grains = if scene.scene.grains.is_some() {
+            let c = LbmDem::new(
+                scene,
+                fluid.as_mut(),
+                &built.setup.faces,
+                &partition,
+                comm,
+                restored,
+            )?;
+            let probed: Vec<u64> = targets
+                .iter()
+                .filter_map(|t| match t {
+                    ProbeTarget::Grain(id) => Some(*id),
+                    _ => None,
+                })
+                .collect();
+            if !probed.is_empty() {
+                let ids: Vec<u64> = c.radii(comm).iter().map(|p| p.0).collect();
+                if let Some(id) = probed.iter().find(|id| ids.binary_search(id).is_err()) {
+                    return Err(invalid(
+                        "id",
+                        format!(
+                            "grain probe names grain {id}, but the sample has grains 0..{}",
+                            ids.len()
+                        ),
+                    )
+                    .into());
+                }
+            }
+            fluid.update_boundaries();
+            Some(c)
+        } else {
+            None
         };
         let b = &scene.scene.boundaries;
         let ramp_s = [&b.west, &b.east, &b.south, &b.north]
@@ -314,20 +318,26 @@ impl<T: Real> Simulation<T> {
     /// Probes and output are driven by the caller. Collective.
     pub fn step(&mut self, comm: &dyn Comm) -> Result<(), StepFailure> {
         let lat = &mut self.fluid;
+        if let Some(c) = &mut self.grains {
+            self.times.time(stage::COUPLING, || c.plan(lat.as_ref()));
+        }
         let wait0 = lat.lattice().halo_wait_seconds();
         let t = Instant::now();
-        let r = lat.stream_collide(comm);
+        let r = match &mut self.grains {
+            Some(c) => lat.stream_collide_moving(comm, &mut c.moving()),
+            None => lat.stream_collide(comm).map(|_| None),
+        };
         let waited = lat.lattice().halo_wait_seconds() - wait0;
         self.times.seconds[stage::COLLIDE_STREAM] += t.elapsed().as_secs_f64() - waited;
         self.times.seconds[stage::HALO_WAIT] += waited;
-        r?;
+        let bad = r?;
         if let Some(c) = &mut self.grains {
-            let host = lat
-                .host_lattice_mut()
-                .expect("coupled runs are refused on device backends");
-            self.times.time(stage::COUPLING, || c.exchange(host))?;
-            self.times.time(stage::DEM, || c.advance())?;
-            self.times.time(stage::COUPLING, || c.remap(host));
+            let fluid = lat.as_mut();
+            let step = fluid.lattice().steps_done();
+            self.times
+                .time(stage::COUPLING, || c.exchange(step, bad, comm))?;
+            self.times.time(stage::DEM, || c.advance(comm))?;
+            self.times.time(stage::COUPLING, || c.remap(fluid, comm));
         }
         self.times
             .time(stage::BOUNDARIES, || lat.update_boundaries());
@@ -365,7 +375,14 @@ impl<T: Real> Simulation<T> {
         } else {
             Vec::new()
         };
-        if self.probe_on_rank_face {
+        let points = self
+            .targets
+            .iter()
+            .any(|p| matches!(p, ProbeTarget::Cell(..)));
+        if points {
+            self.show_grains();
+        }
+        if self.probe_on_rank_face || (points && self.grains.is_some() && comm.size() > 1) {
             self.fluid.refresh_halos(comm);
         }
         let (x0, nx) = (self.fluid.lattice().x_offset(), self.fluid.lattice().nx());
@@ -408,14 +425,8 @@ impl<T: Real> Simulation<T> {
                         .grains
                         .as_ref()
                         .expect("validated: grain probes need grains");
-                    let g = c.grains();
-                    let i = g.id.iter().position(|&x| x == id).expect("validated id");
-                    let f = c.hydrodynamic()[i];
-                    s.push(
-                        step,
-                        t,
-                        &[g.x[i], g.y[i], g.vx[i], g.vy[i], g.omega[i], f[0], f[1]],
-                    );
+                    let row = c.probe(id, comm).expect("validated id");
+                    s.push(step, t, &row);
                 }
                 ProbeTarget::Solid(id) => {
                     let f = forces[id as usize - 1];
@@ -430,9 +441,21 @@ impl<T: Real> Simulation<T> {
         self.times.seconds[stage::PROBES] += t0.elapsed().as_secs_f64();
     }
 
-    /// This slab's fields at the current step (exchanged halos refreshed first). Collective.
+    /// This slab's fields at the current step (exchanged halos refreshed first; the fluid
+    /// under bounce-back grains at rest at their velocity). Collective.
     pub fn fields(&mut self, comm: &dyn Comm) -> Fields {
+        self.show_grains();
         self.fluid.fields(comm)
+    }
+
+    /// Before fields or probes are read: the fluid under bounce-back grains at rest at
+    /// their velocity, local halos refilled, so that cells next to a grain read it the
+    /// same way on any rank count (the sweep's values under grains are never used).
+    fn show_grains(&mut self) {
+        if let Some(c) = &mut self.grains {
+            c.fill_rest(self.fluid.as_mut());
+            self.fluid.update_boundaries();
+        }
     }
 
     /// Totals over the whole lattice from this slab's `f`; same bits on any rank count.

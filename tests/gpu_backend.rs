@@ -48,9 +48,9 @@ fn compare<T: Real>(scene_path: &str, steps: usize, tolerance: f64) {
 fn compare_stored<T: Real>(scene_path: &str, steps: usize, tolerance: f64, storage: GpuStorage) {
     let scene = grainflow::scene::load(&root().join(scene_path)).unwrap_or_else(|e| panic!("{e}"));
     let comm = SingleProcess;
-    let mut cpu = Simulation::<T>::new(&scene, &comm, Backend::Cpu, GpuStorage::Native)
+    let mut cpu = Simulation::<T>::new(&scene, &comm, Backend::Cpu, GpuStorage::Native, None)
         .unwrap_or_else(|e| panic!("{e}"));
-    let mut gpu = Simulation::<T>::new(&scene, &comm, Backend::Gpu, storage)
+    let mut gpu = Simulation::<T>::new(&scene, &comm, Backend::Gpu, storage, None)
         .unwrap_or_else(|e| panic!("{e}"));
     for _ in 0..steps {
         cpu.step(&comm).expect("CPU run stays stable");

@@ -5,84 +5,11 @@
 mod common;
 use common::root;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_grainflow");
 
-/// Run `grainflow ARGS` on `ranks` ranks: directly for 1, under mpirun otherwise.
-fn grainflow(ranks: usize, args: &[&str]) -> Output {
-    let o = common::on_ranks(ranks, BIN)
-        .args(args)
-        .args(["--quiet", "--threads", "1"])
-        .output()
-        .expect("grainflow or mpirun starts (scripts/setup.sh installs Open MPI)");
-    eprintln!("$ {ranks} rank(s): grainflow {}", args.join(" "));
-    eprintln!("{}", String::from_utf8_lossy(&o.stderr));
-    o
-}
-
-fn run_ok(ranks: usize, scene: &str, out: &Path, extra: &[&str]) {
-    let mut args = vec!["run", scene, "--out", out.to_str().unwrap()];
-    args.extend_from_slice(extra);
-    let o = grainflow(ranks, &args);
-    assert!(
-        o.status.success(),
-        "{ranks} ranks: {scene} failed: {:?}",
-        o.status
-    );
-}
-
-/// Every dataset of every snapshot group, as raw f64 values.
-fn snapshots(path: &Path) -> Vec<(String, Vec<f64>)> {
-    let f = hdf5::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut out = Vec::new();
-    for g in f.member_names().unwrap() {
-        let group = f.group(&g).unwrap();
-        for d in group.member_names().unwrap() {
-            let v = group.dataset(&d).unwrap().read_raw::<f64>().unwrap();
-            out.push((format!("{g}/{d}"), v));
-        }
-    }
-    assert!(!out.is_empty(), "{} has no snapshots", path.display());
-    out
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
-}
-
-fn assert_bit_identical(a: &Path, b: &Path) {
-    let (sa, sb) = (
-        snapshots(&a.join("fields.h5")),
-        snapshots(&b.join("fields.h5")),
-    );
-    assert_eq!(
-        sa.iter().map(|x| &x.0).collect::<Vec<_>>(),
-        sb.iter().map(|x| &x.0).collect::<Vec<_>>()
-    );
-    for ((name, va), (_, vb)) in sa.iter().zip(&sb) {
-        let differ = va
-            .iter()
-            .zip(vb)
-            .filter(|(x, y)| x.to_bits() != y.to_bits())
-            .count();
-        assert_eq!(
-            differ, 0,
-            "{name}: {differ} values differ between {a:?} and {b:?}"
-        );
-    }
-    let (ja, jb) = (summary(a), summary(b));
-    for key in [
-        "totals_initial",
-        "totals_final",
-        "probes",
-        "results",
-        "checks",
-        "fluid_cells",
-    ] {
-        assert_eq!(ja[key], jb[key], "summary `{key}` differs");
-    }
-}
+use common::{assert_bit_identical, grainflow, run_ok, snapshots, summary};
 
 fn rank_invariance(scene: &str) {
     let d = tempfile::tempdir().unwrap();

@@ -1,52 +1,103 @@
-//! The coupled grains of a fluid scene: the DEM system, the coupler, and the unit
-//! conversions between them (the DEM works in SI, the coupler in lattice units).
+//! The coupled grains of a fluid scene on one rank's slab: the distributed DEM, the coupler,
+//! the ghost grains, and the unit conversions between them (the DEM works in SI, the coupler
+//! in lattice units).
+//!
+//! A grain belongs to the rank whose fluid slab holds its centre (the DEM's slabs are the
+//! fluid's). Forces on a grain are summed per lattice column wherever its cells are, and
+//! its owner adds the columns in order, so a coupled run gives the same bits on any number
+//! of ranks (tested with mpirun).
 
-use super::exchange::{Coupler, CouplingError};
+use super::exchange::{Coupler, CouplingError, Unstable};
+use super::ghosts::{GhostState, GrainHalo};
 use super::map::{GrainView, SlabFrame};
-use crate::dem::{DemSystem, Grains, Wall};
+use super::sums::{total, ColumnSums, Load};
+use crate::dem::{DemSetup, DemSystem, Grains, SlabDem, Wall};
 use crate::lbm::lattice::{Face, FaceCondition};
-use crate::lbm::{Lattice, Real};
+use crate::lbm::moving::MovingCells;
+use crate::lbm::{FluidBackend, Real};
 use crate::run::RunError;
 use crate::scene::coupling::{grain_scene, MIN_CELLS_PER_DIAMETER};
 use crate::scene::{Units, ValidScene};
-use decomposition::Comm;
+use decomposition::{Comm, SlabPartition};
 
-/// Grains coupled to this rank's lattice.
+/// Where a grain in view comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Source {
+    /// This rank owns it (index among the owned grains).
+    Owned(u32),
+    /// A ghost from the neighbour on this side.
+    Ghost(u8),
+}
+
+/// Values carried with each owned grain through the DEM's migration: the previous step's
+/// hydrodynamic force and torque (for the two-step average), then the one held in the last
+/// advance (both SI).
+const CARRY: usize = 6;
+
+/// What a restart gives the coupled grains instead of preparing the sample.
+pub struct RestoredCoupling {
+    /// Every grain, sorted by id, with the forces of its last evaluation.
+    pub grains: Grains,
+    /// Pair and wall contact history.
+    pub history: crate::dem::system::HistoryMap,
+    /// Wall ends and removal flags.
+    pub walls: crate::io::grains_checkpoint::WallStates,
+    /// DEM time (s) and steps.
+    pub clock: (f64, u64),
+    /// Per grain, by id: external force held (SI), the previous hydrodynamic force (SI)
+    /// and the pending hand-over (lattice units).
+    pub per_grain: Vec<(u64, [f64; 9])>,
+}
+
+/// Grains coupled to this rank's slab of the fluid.
 pub struct LbmDem {
-    /// The grains and their contacts (SI units, N and m per metre of depth).
-    pub dem: DemSystem,
+    /// The grains and their contacts (SI units, N and m per metre of depth), distributed
+    /// over the fluid's slabs.
+    pub dem: SlabDem,
     coupler: Coupler,
+    halo: GrainHalo,
     substeps: u32,
     units: Units,
     /// Domain size (m).
     domain: [f64; 2],
-    /// Grains in lattice units, refreshed after every DEM advance.
+    /// Grains in view (owned, then ghosts, merged in increasing id), lattice units.
     views: Vec<GrainView>,
-    /// Force and torque held on each grain during the last advance (SI): hydrodynamic plus
-    /// repulsion.
-    held: Vec<[f64; 3]>,
-    /// Hydrodynamic part of `held` (SI).
-    hydro: Vec<[f64; 3]>,
-    /// The previous step's hydrodynamic force (SI), for the two-step average.
-    prev: Vec<[f64; 3]>,
+    ids: Vec<u64>,
+    source: Vec<Source>,
+    /// Masses of the grains in view (kg/m), for the repulsion.
+    mass: Vec<f64>,
+    /// Per owned grain: its view.
+    view_of: Vec<u32>,
+    /// Per owned grain: the last exchange's load and the last remap's hand-over (lattice).
+    load: Vec<Load>,
+    handover: Vec<Load>,
     /// Hold the average of the last two steps' forces.
     average: bool,
     /// Repulsion (range m, strength in submerged weights), if on.
     repulsion: Option<(f64, f64)>,
-    /// Submerged weight per grain (N/m).
-    weight: Vec<f64>,
+    /// |g| (1 − ρ/ρ_s): submerged weight per unit mass (m/s²).
+    reduced_gravity: f64,
     /// Walls to remove at a time (index, time s).
     removals: Vec<(usize, f64)>,
+    /// Fluid steps taken (for messages).
+    step: u64,
+    /// Scratch for partial sums.
+    partials: Vec<(u32, Load)>,
 }
 
 impl LbmDem {
-    /// Prepare the grains of `scene` (packing and settling as a grains scene would), add a
-    /// DEM wall on every wall face of the fluid, and place the grains on `lat`.
-    /// Errors name the key: a grain outside the domain or under three cells across.
+    /// Prepare the grains of `scene` (packing and settling as a grains scene would, or the
+    /// state of a checkpoint), add a DEM wall on every wall face of the fluid (`faces`: the
+    /// whole lattice's), spread them over the slabs of `partition`, and place them on this
+    /// rank's `fluid`. Errors name the key: a grain outside the domain or under three cells
+    /// across, a slab too narrow for the grains. Collective.
     pub fn new<T: Real>(
         scene: &ValidScene,
-        lat: &mut Lattice<T>,
+        fluid: &mut dyn FluidBackend<T>,
+        faces: &[FaceCondition; 4],
+        partition: &SlabPartition,
         comm: &dyn Comm,
+        restored: Option<RestoredCoupling>,
     ) -> Result<Self, RunError> {
         let s = &scene.scene;
         let (spec, coupling) = match (&s.grains, &s.coupling) {
@@ -56,91 +107,139 @@ impl LbmDem {
         let units = scene.units;
         let invalid = |key: &str, message: String| scene.invalid(key, message);
         let gs = grain_scene(s, spec, &scene.base_dir, &scene.path);
-        let (grains, _) = crate::run_grains::sample::prepare(&gs, comm)?;
         let domain = gs.scene.region.max_m;
-        for i in 0..grains.len() {
-            let (x, y, r) = (grains.x[i], grains.y[i], grains.r[i]);
-            if x - r < 0.0 || y - r < 0.0 || x + r > domain[0] || y + r > domain[1] {
-                return Err(invalid(
-                    "sample",
-                    format!(
-                        "grain {} at ({x}, {y}) m with radius {r} m is not wholly inside the \
-                         fluid domain [0, 0]–{domain:?} m; move it inside",
-                        grains.id[i]
-                    ),
-                )
-                .into());
-            }
-            let cells = 2.0 * r / units.dx_m;
-            if cells < MIN_CELLS_PER_DIAMETER {
-                return Err(invalid(
-                    "sample",
-                    format!(
-                        "grain {} is {cells:.2} cells across; the coupling needs at least \
-                         {MIN_CELLS_PER_DIAMETER}: refine the lattice or use larger grains",
-                        grains.id[i]
-                    ),
-                )
-                .into());
-            }
-        }
         let rho_ratio = s.fluid.density_kg_m3 / spec.density_kg_m3;
         let g = spec.gravity_m_s2;
         // Static buoyancy by reduced gravity (1 − ρ/ρ_s) g (seed §5.4, eq. 5.57).
         let gravity = [g[0] * (1.0 - rho_ratio), g[1] * (1.0 - rho_ratio)];
-        let weight: Vec<f64> = grains
-            .m
-            .iter()
-            .map(|m| m * (gravity[0].hypot(gravity[1])))
-            .collect();
         let mut walls = gs.walls();
-        walls.extend(fluid_walls(lat, domain, spec.contact.friction));
-        let dt_d = gs.time_step(&grains);
-        let substeps = coupling
-            .substeps
-            .unwrap_or_else(|| (units.dt_s / dt_d).floor() as u32 + 1);
-        let dt_s = units.dt_s / substeps as f64;
-        let mut dem = DemSystem::new(
-            grains,
+        walls.extend(fluid_walls(faces, domain, spec.contact.friction));
+        let bounds: Vec<f64> = (0..=comm.size())
+            .map(|r| {
+                let x = if r < comm.size() {
+                    partition.slab(r).x_begin
+                } else {
+                    partition.columns()
+                };
+                x as f64 * units.dx_m
+            })
+            .collect();
+        let (grains, restored) = match restored {
+            Some(mut r) => (std::mem::take(&mut r.grains), Some(r)),
+            None => (crate::run_grains::sample::prepare(&gs, comm)?.0, None),
+        };
+        check_grains(&grains, domain, units.dx_m).map_err(|(k, m)| invalid(k, m))?;
+        let substeps = substeps_for(coupling, &gs, &grains, units.dt_s);
+        let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
+        let mut setup = DemSetup {
             walls,
-            gs.contact_model(),
+            model: gs.contact_model(),
             gravity,
-            dt_s,
-            gs.lambda(),
-            spec.allow_overlap,
-        )?;
-        dem.global_damping = spec.global_damping_1_s;
-        // Grain indices must stay fixed: the coupler's per-grain forces follow them.
-        dem.spatial_sort = false;
+            dt: units.dt_s / substeps as f64,
+            lambda: gs.lambda(),
+        };
+        let fresh = restored.is_none();
+        let (mut dem, per_grain) = match restored {
+            None => {
+                let d = SlabDem::new(grains, &bounds, setup, spec.allow_overlap, comm);
+                (d.map_err(|e| slab_error(scene, e))?, Vec::new())
+            }
+            Some(r) => {
+                crate::io::grains_checkpoint::apply_walls(&mut setup.walls, &r.walls);
+                let d = SlabDem::restore(grains, r.history, &bounds, setup, r.clock, comm);
+                (d.map_err(|e| slab_error(scene, e))?, r.per_grain)
+            }
+        };
+        dem.system.global_damping = spec.global_damping_1_s;
+        // Grain indices must stay fixed between migrations: the held forces follow them.
+        dem.system.spatial_sort = false;
+        dem.rebalance_every = 0;
+        dem.system.enable_carry(CARRY);
+        let range = coupling.repulsion.as_ref().map_or(0.0, |r| r.range_m);
+        // A neighbour sees a grain that reaches its cells (two cells beyond the radius, plus
+        // the halo column) or that can repel one of its grains.
+        let margin = (3.0 * units.dx_m).max(rmax + range + DemSystem::skin_for(rmax) + units.dx_m);
+        let narrowest = (0..comm.size())
+            .map(|r| partition.slab(r).width())
+            .min()
+            .unwrap_or(0) as f64
+            * units.dx_m;
+        if comm.size() > 1 && narrowest < 2.0 * rmax + margin {
+            return Err(invalid(
+                "ranks",
+                format!(
+                    "a fluid slab is {narrowest} m wide, narrower than a grain's reach \
+                     ({:.3e} m): run on fewer ranks",
+                    2.0 * rmax + margin
+                ),
+            )
+            .into());
+        }
+        let lat = fluid.lattice();
+        let periodic_x = faces[Face::West as usize] == FaceCondition::Periodic;
+        let frame = SlabFrame {
+            nx: lat.nx(),
+            ny: lat.ny(),
+            x0: lat.x_offset(),
+            global_nx: lat.global_nx(),
+            stride: lat.stride(),
+            periodic_x,
+            periodic_y: faces[Face::South as usize] == FaceCondition::Periodic,
+        };
+        let halo = GrainHalo::new(partition, comm.rank(), units.dx_m, periodic_x, margin);
         let removals = spec
             .walls
             .iter()
             .enumerate()
             .filter_map(|(i, w)| w.remove_at_s.map(|t| (i, t)))
             .collect();
-        let frame = frame_of(lat);
-        let n = dem.owned();
-        let coupler = Coupler::new(coupling.scheme, coupling.refill, frame, n);
+        let owned = dem.system.owned();
         let mut me = Self {
             dem,
-            coupler,
+            coupler: Coupler::new(coupling.scheme, coupling.refill, frame),
+            halo,
             substeps,
             units,
             domain,
             views: Vec::new(),
-            held: vec![[0.0; 3]; n],
-            hydro: vec![[0.0; 3]; n],
-            prev: vec![[0.0; 3]; n],
+            ids: Vec::new(),
+            source: Vec::new(),
+            mass: Vec::new(),
+            view_of: Vec::new(),
+            load: vec![[0.0; 3]; owned],
+            handover: vec![[0.0; 3]; owned],
             average: coupling
                 .force_averaging
                 .unwrap_or(coupling.scheme == super::Scheme::BounceBack),
             repulsion: coupling.repulsion.as_ref().map(|r| (r.range_m, r.strength)),
-            weight,
+            reduced_gravity: gravity[0].hypot(gravity[1]),
             removals,
+            step: lat.steps_done(),
+            partials: Vec::new(),
         };
-        me.refresh_views();
-        me.coupler.start(lat, &me.views);
+        if !fresh {
+            me.restore_per_grain(&per_grain);
+        }
+        me.refresh_views(comm);
+        me.coupler.start(fluid, &me.views, &me.ids, fresh);
         Ok(me)
+    }
+
+    /// Put each owned grain's checkpointed state (by id) back in place.
+    fn restore_per_grain(&mut self, rows: &[(u64, [f64; 9])]) {
+        let sys = &mut self.dem.system;
+        let mut external = Vec::with_capacity(sys.owned());
+        for i in 0..sys.owned() {
+            let id = sys.grains.id[i];
+            let p = rows
+                .binary_search_by_key(&id, |r| r.0)
+                .map(|k| rows[k].1)
+                .unwrap_or([0.0; 9]);
+            external.push([p[0], p[1], p[2]]);
+            sys.carry_mut(i)[..3].copy_from_slice(&p[3..6]);
+            self.handover[i] = [p[6], p[7], p[8]];
+        }
+        sys.restore_external(external);
     }
 
     /// DEM sub-steps per fluid step.
@@ -148,176 +247,529 @@ impl LbmDem {
         self.substeps
     }
 
-    /// The coupler (maps, forces).
+    /// The coupler (maps, loads).
     pub fn coupler(&self) -> &Coupler {
         &self.coupler
     }
 
-    /// Hydrodynamic force and torque on each grain held during the last advance
-    /// (N/m, N·m/m), by grain index.
-    pub fn hydrodynamic(&self) -> &[[f64; 3]] {
-        &self.hydro
+    /// The DEM system of this rank (owned grains first).
+    pub fn system(&self) -> &DemSystem {
+        &self.dem.system
     }
 
-    /// Grains in lattice units.
+    /// Hydrodynamic force and torque on owned grain `i` held during the last advance
+    /// (N/m, N·m/m).
+    pub fn hydrodynamic(&self, i: usize) -> [f64; 3] {
+        let c = self.dem.system.carry(i);
+        [c[3], c[4], c[5]]
+    }
+
+    /// Grains in view (owned and ghosts, increasing id), lattice units.
     pub fn views(&self) -> &[GrainView] {
         &self.views
     }
 
-    fn refresh_views(&mut self) {
-        let (dx, dt) = (self.units.dx_m, self.units.dt_s);
-        let g = &self.dem.grains;
-        self.views.clear();
-        self.views.extend((0..self.dem.owned()).map(|i| GrainView {
-            centre: [g.x[i] / dx, g.y[i] / dx],
-            radius: g.r[i] / dx,
-            velocity: [g.vx[i] * dt / dx, g.vy[i] * dt / dx],
-            omega: g.omega[i] * dt,
-        }));
+    /// Owned grains as their ghosts see them.
+    fn owned_states(&self) -> Vec<GhostState> {
+        let g = &self.dem.system.grains;
+        (0..self.dem.system.owned())
+            .map(|i| GhostState {
+                id: g.id[i],
+                x: [g.x[i], g.y[i]],
+                r: g.r[i],
+                m: g.m[i],
+                v: [g.vx[i], g.vy[i]],
+                omega: g.omega[i],
+            })
+            .collect()
     }
 
-    /// Stage "coupling" (fluid side): see [`Coupler::exchange`].
-    pub fn exchange<T: Real>(&mut self, lat: &mut Lattice<T>) -> Result<(), CouplingError> {
-        let ids = &self.dem.grains.id;
-        self.coupler.exchange(lat, &self.views, ids)
+    /// Exchange ghosts with the neighbours and rebuild the views: owned and ghost grains in
+    /// increasing id, in lattice units. Collective.
+    fn refresh_views(&mut self, comm: &dyn Comm) {
+        let owned = self.owned_states();
+        let ghosts = if self.halo.has_peers() {
+            self.halo.exchange_states(comm, &owned)
+        } else {
+            Vec::new()
+        };
+        let mut all: Vec<(GhostState, Source)> = owned
+            .into_iter()
+            .enumerate()
+            .map(|(i, s)| (s, Source::Owned(i as u32)))
+            .chain(
+                ghosts
+                    .into_iter()
+                    .map(|(s, side)| (s, Source::Ghost(side as u8))),
+            )
+            .collect();
+        all.sort_by_key(|(s, _)| s.id);
+        // Two ranks across a periodic face: a grain near both faces arrives once per side.
+        all.dedup_by_key(|(s, _)| s.id);
+        let (dx, dt) = (self.units.dx_m, self.units.dt_s);
+        self.views.clear();
+        self.ids.clear();
+        self.source.clear();
+        self.mass.clear();
+        self.view_of.clear();
+        self.view_of.resize(self.dem.system.owned(), 0);
+        for (v, (s, src)) in all.iter().enumerate() {
+            self.views.push(GrainView {
+                centre: [s.x[0] / dx, s.x[1] / dx],
+                radius: s.r / dx,
+                velocity: [s.v[0] * dt / dx, s.v[1] * dt / dx],
+                omega: s.omega * dt,
+            });
+            self.ids.push(s.id);
+            self.source.push(*src);
+            self.mass.push(s.m);
+            if let Source::Owned(i) = src {
+                self.view_of[*i as usize] = v as u32;
+            }
+        }
+    }
+
+    /// Each owned grain's total of `sums` (per-column partial sums over views): the ghosts'
+    /// partial sums go back to the ranks they came from, and every owner adds its grains'
+    /// columns in order. Collective.
+    fn reduce(&mut self, which: Which, comm: &dyn Comm) -> Vec<Load> {
+        let sums: &ColumnSums = match which {
+            Which::Exchange => self.coupler.loads(),
+            Which::Handover => self.coupler.handover_loads(),
+        };
+        let mut remote: Vec<(u64, u32, Load)> = Vec::new();
+        if self.halo.has_peers() {
+            let mut out = [Vec::new(), Vec::new()];
+            for (v, src) in self.source.iter().enumerate() {
+                if let Source::Ghost(side) = *src {
+                    sums.partials(v, &mut self.partials);
+                    let msg = &mut out[side as usize];
+                    msg.extend_from_slice(&[
+                        f64::from_bits(self.ids[v]),
+                        self.partials.len() as f64,
+                    ]);
+                    for (c, l) in &self.partials {
+                        msg.extend_from_slice(&[*c as f64, l[0], l[1], l[2]]);
+                    }
+                }
+            }
+            let got = self.halo.return_loads(comm, [&out[0], &out[1]]);
+            for msg in &got {
+                let mut at = 0;
+                while at < msg.len() {
+                    let (id, n) = (msg[at].to_bits(), msg[at + 1] as usize);
+                    for e in msg[at + 2..at + 2 + 4 * n].chunks_exact(4) {
+                        remote.push((id, e[0] as u32, [e[1], e[2], e[3]]));
+                    }
+                    at += 2 + 4 * n;
+                }
+            }
+            remote.sort_by_key(|r| (r.0, r.1));
+        }
+        let owned = self.dem.system.owned();
+        let mut totals = Vec::with_capacity(owned);
+        for i in 0..owned {
+            let v = self.view_of[i] as usize;
+            sums.partials(v, &mut self.partials);
+            let id = self.ids[v];
+            let from = remote.partition_point(|r| r.0 < id);
+            let to = remote.partition_point(|r| r.0 <= id);
+            self.partials
+                .extend(remote[from..to].iter().map(|r| (r.1, r.2)));
+            totals.push(total(&mut self.partials));
+        }
+        totals
+    }
+
+    /// Stage "coupling" before the sweep: plan the cells at the grains' surfaces (see
+    /// [`Coupler::plan`]).
+    pub fn plan<T: Real>(&mut self, fluid: &dyn FluidBackend<T>) {
+        self.coupler.plan(fluid.lattice(), &self.views);
+    }
+
+    /// The planned cells, for the fluid's sweep.
+    pub fn moving(&mut self) -> MovingCells<'_> {
+        self.coupler.moving()
+    }
+
+    /// Stage "coupling" after the sweep: every grain's load is summed on its owner. `bad`
+    /// is what the sweep reported. Errors (on every rank) when a recomputed cell went bad.
+    /// Collective.
+    pub fn exchange(
+        &mut self,
+        step: u64,
+        bad: Option<(usize, f64)>,
+        comm: &dyn Comm,
+    ) -> Result<(), CouplingError> {
+        self.step = step;
+        let bad = self.coupler.collect(&self.views, bad);
+        self.agree(comm, bad)?;
+        self.load = self.reduce(Which::Exchange, comm);
+        Ok(())
+    }
+
+    /// Show the grains in the fluid's fields: the fluid under them at rest at their velocity
+    /// (bounce-back schemes; see [`Coupler::fill_rest`]).
+    pub fn fill_rest<T: Real>(&mut self, fluid: &mut dyn FluidBackend<T>) {
+        self.coupler.fill_rest(fluid, &self.views);
+    }
+
+    /// The first bad cell over all ranks, known to every rank. Collective.
+    fn agree(&self, comm: &dyn Comm, bad: Option<Unstable>) -> Result<(), CouplingError> {
+        if !comm.any(bad.is_some()) {
+            return Ok(());
+        }
+        let mine = match bad {
+            Some((k, g, density)) => {
+                let f = self.frame();
+                let (x, y) = f.local(k);
+                vec![
+                    (x + f.x0 as i64) as f64,
+                    y as f64,
+                    f64::from_bits(self.ids[g as usize]),
+                    density,
+                ]
+            }
+            None => Vec::new(),
+        };
+        let all = comm.all_gather_f64(&mine);
+        Err(CouplingError::Unstable {
+            step: self.step,
+            x: all[0] as usize,
+            y: all[1] as usize,
+            grain: all[2].to_bits(),
+            density: all[3],
+        })
+    }
+
+    fn frame(&self) -> SlabFrame {
+        self.coupler.frame
     }
 
     /// Stage "dem": hold the hydrodynamic force (and the repulsion) and take the DEM
-    /// sub-steps of one fluid step. Errors when a grain leaves the fluid domain.
-    pub fn advance(&mut self) -> Result<(), CouplingError> {
+    /// sub-steps of one fluid step, then exchange the ghosts. Errors (on every rank) when a
+    /// grain leaves the fluid domain. Collective.
+    pub fn advance(&mut self, comm: &dyn Comm) -> Result<(), CouplingError> {
         let u = self.units;
-        for (k, f) in self.coupler.forces().enumerate() {
+        let owned = self.dem.system.owned();
+        let mut held = Vec::with_capacity(owned);
+        for i in 0..owned {
+            let (a, b) = (self.load[i], self.handover[i]);
             // Lattice momentum per step → N/m; the torque's arm is in cells (× Δx).
-            self.hydro[k] = [
-                u.force_to_si(f[0]),
-                u.force_to_si(f[1]),
-                u.force_to_si(f[2]) * u.dx_m,
+            let h = [
+                u.force_to_si(a[0] + b[0]),
+                u.force_to_si(a[1] + b[1]),
+                u.force_to_si(a[2] + b[2]) * u.dx_m,
             ];
-        }
-        if self.average {
-            // Ladd 1994 (part I, §4): the force of two successive steps, averaged, damps the
-            // step-to-step oscillation that makes explicit bounce-back coupling unstable for
-            // light grains (their rotation first).
-            for (h, (a, b)) in self.held.iter_mut().zip(self.hydro.iter().zip(&self.prev)) {
-                *h = [
-                    0.5 * (a[0] + b[0]),
-                    0.5 * (a[1] + b[1]),
-                    0.5 * (a[2] + b[2]),
-                ];
+            let carry = self.dem.system.carry_mut(i);
+            if self.average {
+                // Ladd 1994 (part I, §4): the force of two successive steps, averaged, damps
+                // the step-to-step oscillation that makes explicit bounce-back coupling
+                // unstable for light grains (their rotation first).
+                held.push([
+                    0.5 * (h[0] + carry[0]),
+                    0.5 * (h[1] + carry[1]),
+                    0.5 * (h[2] + carry[2]),
+                ]);
+                carry[..3].copy_from_slice(&h);
+            } else {
+                held.push(h);
             }
-            self.prev.copy_from_slice(&self.hydro);
-        } else {
-            self.held.copy_from_slice(&self.hydro);
+            carry[3..].copy_from_slice(&h);
         }
         if let Some((range, strength)) = self.repulsion {
-            self.add_repulsion(range, strength);
+            self.add_repulsion(range, strength, &mut held);
         }
-        self.dem.set_external(&self.held);
-        let t_end = self.dem.time + u.dt_s;
+        self.dem.system.set_external(&held);
+        let t_end = self.dem.system.time + u.dt_s;
         for (w, t) in &self.removals {
-            if *t <= t_end && !self.dem.walls[*w].removed {
-                self.dem.remove_wall(*w);
+            if *t <= t_end && !self.dem.system.walls[*w].removed {
+                self.dem.system.remove_wall(*w);
             }
         }
         for _ in 0..self.substeps {
-            self.dem.step();
+            self.dem.step(comm);
         }
-        let g = &self.dem.grains;
-        for i in 0..self.dem.owned() {
-            let (x, y) = (g.x[i], g.y[i]);
-            if !(x >= 0.0 && y >= 0.0 && x <= self.domain[0] && y <= self.domain[1]) {
-                return Err(CouplingError::Left {
-                    step: (self.dem.time / u.dt_s).round() as u64,
-                    grain: g.id[i],
-                    position: [x, y],
-                });
-            }
+        let g = &self.dem.system.grains;
+        let outside: Vec<f64> = (0..self.dem.system.owned())
+            .filter(|&i| {
+                let (x, y) = (g.x[i], g.y[i]);
+                !(x >= 0.0 && y >= 0.0 && x <= self.domain[0] && y <= self.domain[1])
+            })
+            .flat_map(|i| [f64::from_bits(g.id[i]), g.x[i], g.y[i]])
+            .collect();
+        if comm.any(!outside.is_empty()) {
+            let all = comm.all_gather_f64(&outside);
+            return Err(CouplingError::Left {
+                step: self.step,
+                grain: all[0].to_bits(),
+                position: [all[1], all[2]],
+            });
         }
-        self.refresh_views();
+        // The owned set may have changed (migration); the loads are recomputed before use.
+        let owned = self.dem.system.owned();
+        self.load.resize(owned, [0.0; 3]);
+        self.handover.resize(owned, [0.0; 3]);
+        self.refresh_views(comm);
         Ok(())
     }
 
     /// Glowinski et al. (2001) short-range repulsion between grains closer than `range`
-    /// and between grains and walls closer than `range` (walls count as a mirror grain).
-    fn add_repulsion(&mut self, range: f64, strength: f64) {
-        let g = &self.dem.grains;
-        let n = self.dem.owned();
-        for i in 0..n {
-            for j in i + 1..n {
-                let (dx, dy) = (g.x[j] - g.x[i], g.y[j] - g.y[i]);
-                let d = dx.hypot(dy);
-                let gap = d - g.r[i] - g.r[j];
-                if gap < range && d > 0.0 {
-                    let w = self.weight[i].min(self.weight[j]);
-                    let f = strength * w * ((range - gap) / range).powi(2);
-                    self.held[j][0] += f * dx / d;
-                    self.held[j][1] += f * dy / d;
-                    self.held[i][0] -= f * dx / d;
-                    self.held[i][1] -= f * dy / d;
+    /// and between grains and walls closer than `range` (walls count as a mirror grain),
+    /// added to each owned grain's held force: partners in id order, then walls in order.
+    fn add_repulsion(&self, range: f64, strength: f64, held: &mut [[f64; 3]]) {
+        let (dx, gr) = (self.units.dx_m, self.reduced_gravity);
+        let g = &self.dem.system.grains;
+        // Candidates on a grid of cells as wide as the largest reach.
+        let rmax = self.views.iter().map(|v| v.radius * dx).fold(0.0, f64::max);
+        let cell = 2.0 * rmax + range;
+        let key = |v: &GrainView| {
+            (
+                (v.centre[0] * dx / cell).floor() as i64,
+                (v.centre[1] * dx / cell).floor() as i64,
+            )
+        };
+        let mut grid: std::collections::BTreeMap<(i64, i64), Vec<u32>> = Default::default();
+        for (j, v) in self.views.iter().enumerate() {
+            grid.entry(key(v)).or_default().push(j as u32);
+        }
+        let mut near = Vec::new();
+        for (i, h) in held.iter_mut().enumerate() {
+            let vi = self.view_of[i] as usize;
+            let (cx, cy) = key(&self.views[vi]);
+            near.clear();
+            for a in -1..=1 {
+                for b in -1..=1 {
+                    if let Some(list) = grid.get(&(cx + a, cy + b)) {
+                        near.extend_from_slice(list);
+                    }
                 }
             }
-            for w in self.dem.walls.iter().filter(|w| !w.removed) {
+            // View indices are in id order.
+            near.sort_unstable();
+            let wi = self.mass[vi] * gr;
+            for &j in &near {
+                let j = j as usize;
+                if j == vi {
+                    continue;
+                }
+                let (pi, pj) = (&self.views[vi], &self.views[j]);
+                let (ddx, ddy) = (
+                    (pj.centre[0] - pi.centre[0]) * dx,
+                    (pj.centre[1] - pi.centre[1]) * dx,
+                );
+                let d = ddx.hypot(ddy);
+                let gap = d - (pi.radius + pj.radius) * dx;
+                if gap < range && d > 0.0 {
+                    let w = wi.min(self.mass[j] * gr);
+                    let f = strength * w * ((range - gap) / range).powi(2);
+                    // Pushes grain i away from grain j.
+                    h[0] -= f * ddx / d;
+                    h[1] -= f * ddy / d;
+                }
+            }
+            for w in self.dem.system.walls.iter().filter(|w| !w.removed) {
                 let c = w.closest_point([g.x[i], g.y[i]]);
-                let (dx, dy) = (g.x[i] - c[0], g.y[i] - c[1]);
-                let d = dx.hypot(dy);
+                let (ddx, ddy) = (g.x[i] - c[0], g.y[i] - c[1]);
+                let d = ddx.hypot(ddy);
                 let gap = d - g.r[i];
                 if gap < range && d > 0.0 {
-                    let f = strength * self.weight[i] * ((range - gap) / range).powi(2);
-                    self.held[i][0] += f * dx / d;
-                    self.held[i][1] += f * dy / d;
+                    let f = strength * wi * ((range - gap) / range).powi(2);
+                    h[0] += f * ddx / d;
+                    h[1] += f * ddy / d;
                 }
             }
         }
     }
 
-    /// Stage "coupling" after the grains moved: see [`Coupler::remap`].
-    pub fn remap<T: Real>(&mut self, lat: &mut Lattice<T>) {
-        self.coupler.remap(lat, &self.views);
+    /// Stage "coupling" after the grains moved: see [`Coupler::remap`]; the hand-over is
+    /// summed on the owners. Collective.
+    pub fn remap<T: Real>(&mut self, fluid: &mut dyn FluidBackend<T>, comm: &dyn Comm) {
+        self.coupler.remap(fluid, &self.views, &self.ids, comm);
+        if self.coupler.scheme() != super::Scheme::Psm {
+            self.handover = self.reduce(Which::Handover, comm);
+        }
     }
 
     /// Momentum (kg·m/s per metre of depth) of the fluid outside the grains and of the
     /// grains (with force averaging, including the half step of force still in transit):
-    /// the two halves of the momentum balance.
-    pub fn momentum<T: Real>(&self, lat: &Lattice<T>) -> ([f64; 2], [f64; 2]) {
+    /// the two halves of the momentum balance, the same bits on any rank count. Collective.
+    pub fn momentum<T: Real>(
+        &self,
+        fluid: &mut dyn FluidBackend<T>,
+        comm: &dyn Comm,
+    ) -> ([f64; 2], [f64; 2]) {
         let u = self.units;
-        let j = self.coupler.fluid_momentum(lat);
+        let columns: Vec<f64> = self
+            .coupler
+            .fluid_momentum_columns(fluid)
+            .iter()
+            .flat_map(|c| *c)
+            .collect();
+        let all = comm.all_gather_f64(&columns);
+        let mut j = [0.0; 2];
+        for c in all.chunks_exact(2) {
+            j[0] += c[0];
+            j[1] += c[1];
+        }
         // Lattice momentum of a cell → ρ Δx² (mass per depth) × Δx/Δt.
         let scale = u.density_kg_m3 * u.dx_m.powi(3) / u.dt_s;
-        let mut p = self.dem.grains.momentum();
-        if self.average {
+        let sys = &self.dem.system;
+        let g = &sys.grains;
+        let mut rows = Vec::new();
+        for i in 0..sys.owned() {
             // Half of the last step's force is still to be handed to the grains.
-            for f in &self.prev {
-                p[0] += 0.5 * f[0] * u.dt_s;
-                p[1] += 0.5 * f[1] * u.dt_s;
-            }
+            let transit: &[f64] = if self.average {
+                sys.carry(i)
+            } else {
+                &[0.0; 3]
+            };
+            rows.extend_from_slice(&[
+                f64::from_bits(g.id[i]),
+                g.m[i] * g.vx[i],
+                g.m[i] * g.vy[i],
+                0.5 * transit[0] * u.dt_s,
+                0.5 * transit[1] * u.dt_s,
+            ]);
+        }
+        let all = comm.all_gather_f64(&rows);
+        let mut sorted: Vec<&[f64]> = all.chunks_exact(5).collect();
+        sorted.sort_by_key(|r| r[0].to_bits());
+        let mut p = [0.0; 2];
+        for r in &sorted {
+            p[0] += r[1];
+            p[1] += r[2];
+        }
+        for r in &sorted {
+            p[0] += r[3];
+            p[1] += r[4];
         }
         ([j[0] * scale, j[1] * scale], p)
     }
 
-    /// The grains (owned).
-    pub fn grains(&self) -> &Grains {
-        &self.dem.grains
+    /// Every grain's (id, radius m), sorted by id. Collective.
+    pub fn radii(&self, comm: &dyn Comm) -> Vec<(u64, f64)> {
+        let sys = &self.dem.system;
+        let mine: Vec<f64> = (0..sys.owned())
+            .flat_map(|i| [f64::from_bits(sys.grains.id[i]), sys.grains.r[i]])
+            .collect();
+        let mut all: Vec<(u64, f64)> = comm
+            .all_gather_f64(&mine)
+            .chunks_exact(2)
+            .map(|p| (p[0].to_bits(), p[1]))
+            .collect();
+        all.sort_by_key(|p| p.0);
+        all
+    }
+
+    /// Grain `id`'s x, y, vx, vy, ω and hydrodynamic fx, fy (SI) from the rank that owns
+    /// it, on every rank; `None` when no rank has it. Collective.
+    pub fn probe(&self, id: u64, comm: &dyn Comm) -> Option<[f64; 7]> {
+        let sys = &self.dem.system;
+        let g = &sys.grains;
+        let mine: Vec<f64> = (0..sys.owned())
+            .find(|&i| g.id[i] == id)
+            .map(|i| {
+                let f = self.hydrodynamic(i);
+                vec![g.x[i], g.y[i], g.vx[i], g.vy[i], g.omega[i], f[0], f[1]]
+            })
+            .unwrap_or_default();
+        let all = comm.all_gather_f64(&mine);
+        (all.len() >= 7).then(|| std::array::from_fn(|k| all[k]))
+    }
+
+    /// Walls of the DEM (the scene's, then one per wall face of the fluid).
+    pub fn wall_count(&self) -> usize {
+        self.dem.system.walls.len()
+    }
+
+    /// Per owned grain: external force held (SI), previous hydrodynamic force (SI) and the
+    /// pending hand-over (lattice units), for checkpoints.
+    pub fn per_grain_state(&self) -> Vec<[f64; 9]> {
+        let sys = &self.dem.system;
+        (0..sys.owned())
+            .map(|i| {
+                let e = sys.external().get(i).copied().unwrap_or([0.0; 3]);
+                let p = sys.carry(i);
+                let h = self.handover[i];
+                [e[0], e[1], e[2], p[0], p[1], p[2], h[0], h[1], h[2]]
+            })
+            .collect()
     }
 }
 
-/// The slab frame of `lat`.
-pub fn frame_of<T: Real>(lat: &Lattice<T>) -> SlabFrame {
-    let faces = lat.faces();
-    SlabFrame {
-        nx: lat.nx(),
-        ny: lat.ny(),
-        x0: lat.x_offset(),
-        global_nx: lat.global_nx(),
-        stride: lat.stride(),
-        // Coupled runs are single-rank, so a periodic x face is still `Periodic` here.
-        periodic_x: faces[Face::West as usize] == FaceCondition::Periodic,
-        periodic_y: faces[Face::South as usize] == FaceCondition::Periodic,
+/// Which per-column sums to reduce.
+#[derive(Clone, Copy)]
+enum Which {
+    Exchange,
+    Handover,
+}
+
+/// How many DEM walls a coupled scene has: its own, then one per wall face of the fluid
+/// (what a checkpoint of it holds).
+pub fn wall_count(scene: &ValidScene) -> Result<usize, RunError> {
+    let built = crate::scene::build_lattice(scene)?;
+    let spec = scene.scene.grains.as_ref().map_or(0, |g| g.walls.len());
+    let faces = fluid_walls(&built.setup.faces, [1.0, 1.0], 0.0).len();
+    Ok(spec + faces)
+}
+
+/// DEM sub-steps per fluid step: the scene's, or n_s = ⌊Δt/Δt_D⌋ + 1 (seed eq. 5.61).
+fn substeps_for(
+    c: &crate::scene::coupling::CouplingSpec,
+    gs: &crate::scene::ValidGrainScene,
+    grains: &Grains,
+    dt: f64,
+) -> u32 {
+    c.substeps
+        .unwrap_or_else(|| (dt / gs.time_step(grains)).floor() as u32 + 1)
+}
+
+/// Refuse grains outside the domain or under three cells across: (key, message).
+fn check_grains(g: &Grains, domain: [f64; 2], dx: f64) -> Result<(), (&'static str, String)> {
+    for i in 0..g.len() {
+        let (x, y, r) = (g.x[i], g.y[i], g.r[i]);
+        if x - r < 0.0 || y - r < 0.0 || x + r > domain[0] || y + r > domain[1] {
+            return Err((
+                "sample",
+                format!(
+                    "grain {} at ({x}, {y}) m with radius {r} m is not wholly inside the \
+                     fluid domain [0, 0]–{domain:?} m; move it inside",
+                    g.id[i]
+                ),
+            ));
+        }
+        let cells = 2.0 * r / dx;
+        if cells < MIN_CELLS_PER_DIAMETER {
+            return Err((
+                "sample",
+                format!(
+                    "grain {} is {cells:.2} cells across; the coupling needs at least \
+                     {MIN_CELLS_PER_DIAMETER}: refine the lattice or use larger grains",
+                    g.id[i]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A DEM error from spreading the grains over the slabs, as a scene error.
+fn slab_error(scene: &ValidScene, e: crate::dem::DemError) -> RunError {
+    match e {
+        crate::dem::DemError::Parameter { name: "ranks", .. } => scene
+            .invalid(
+                "ranks",
+                format!("{e} (the grains follow the fluid's slabs)"),
+            )
+            .into(),
+        e => e.into(),
     }
 }
 
 /// A DEM wall along every wall face (bounce-back, moving or free-slip) of the fluid, so
 /// grains cannot leave through them; friction `mu`.
-fn fluid_walls<T: Real>(lat: &Lattice<T>, domain: [f64; 2], mu: f64) -> Vec<Wall> {
+fn fluid_walls(faces: &[FaceCondition; 4], domain: [f64; 2], mu: f64) -> Vec<Wall> {
     let [lx, ly] = domain;
     let ends = [
         (Face::West, [0.0, 0.0], [0.0, ly]),
@@ -328,7 +780,7 @@ fn fluid_walls<T: Real>(lat: &Lattice<T>, domain: [f64; 2], mu: f64) -> Vec<Wall
     ends.iter()
         .filter(|(f, _, _)| {
             matches!(
-                lat.faces()[*f as usize],
+                faces[*f as usize],
                 FaceCondition::Wall { .. } | FaceCondition::FreeSlip
             )
         })

@@ -1,18 +1,27 @@
 //! The fluid side of the coupling: after each stream–collide sweep, the cells next to
 //! grains (bounce-back schemes) or inside them (partially saturated method) are recomputed
-//! from the previous buffer with the grains' surfaces applied, and the momentum they hand
-//! to each grain is summed in a fixed order. Between steps, cells that a moving grain
-//! covers or uncovers are handed over with their momentum.
+//! with the grains' surfaces applied, and the momentum each grain receives is summed per
+//! lattice column (`sums.rs`). Between steps, cells that a moving grain covers or uncovers
+//! are handed over with their momentum (`handover.rs`).
+//!
+//! The coupler only plans: which cells, which links, which velocities (`links.rs`,
+//! `psm.rs`). The fluid backend executes the plan (`lbm::moving`) on its own device and
+//! returns one momentum per link or share, in plan order.
+//!
+//! **Order, and so the bits, do not depend on the partition.** The grains are seen in id
+//! order (owned and ghosts alike), each grain's cells in the order of its bounding box, so
+//! every list a slab builds is the restriction of one global list to the slab's cells;
+//! summed per column, the partial sums are the same on any number of ranks.
 //!
 //! Momentum is counted on the shifted populations (h = f − w). The rest state's part
 //! (ρ₀ c_s² on the surface) integrates to zero over a closed surface, and leaving it out is
 //! what makes fluid + grain momentum conserved to round-off (tested).
 
-use super::map::{cover, shares, GrainView, Share, SlabFrame, NONE};
+use super::map::{cover, GrainView, Share, SlabFrame, NONE};
+use super::sums::ColumnSums;
 use super::{Refill, Scheme};
-use crate::lbm::collision::{equilibrium, Moments};
-use crate::lbm::d2q9::{CX, CY, OPP, Q, W};
-use crate::lbm::{Lattice, Real};
+use crate::lbm::moving::{LinkPlan, MovingCells, PsmPlan};
+use crate::lbm::{FluidBackend, Lattice, Real};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -45,125 +54,108 @@ pub enum CouplingError {
     },
 }
 
-/// Most grains that can act on one cell in one step (links of a boundary cell, or grains
-/// overlapping a cell).
-pub(super) const MAX_PER_CELL: usize = 8;
-
-/// The shares (indices into the share list) of one cell, in grain order.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct ShareRun {
-    pub(super) cell: u32,
-    pub(super) shares: [u32; MAX_PER_CELL],
-    pub(super) n: u8,
+/// Where a link or share of a plan belongs: the grain (index into the views), the image
+/// of its centre that the cell sees (x, lattice units) and the arm from that centre to the
+/// point the momentum acts at.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Owner {
+    pub(super) grain: u32,
+    pub(super) image_x: f64,
+    pub(super) arm: [f64; 2],
 }
 
-/// One recomputed cell: its new populations (shifted), density, and the momentum it hands
-/// to each grain (fx, fy, torque; lattice units).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct CellUpdate {
-    pub(super) cell: u32,
-    pub(super) h: [f64; Q],
-    pub(super) rho: f64,
-    pub(super) n: u8,
-    pub(super) links: [(u32, [f64; 3]); MAX_PER_CELL],
-}
-
-impl CellUpdate {
-    pub(super) fn new(cell: u32) -> Self {
-        Self {
-            cell,
-            h: [0.0; Q],
-            rho: 1.0,
-            n: 0,
-            links: [(0, [0.0; 3]); MAX_PER_CELL],
-        }
-    }
-
-    /// Add grain g's share; shares of one grain are merged.
-    pub(super) fn push(&mut self, g: u32, p: [f64; 3]) {
-        let n = self.n as usize;
-        if let Some(l) = self.links[..n].iter_mut().find(|l| l.0 == g) {
-            l.1[0] += p[0];
-            l.1[1] += p[1];
-            l.1[2] += p[2];
-        } else if n < MAX_PER_CELL {
-            self.links[n] = (g, p);
-            self.n += 1;
-        } else {
-            // More than eight grains on one cell cannot happen for disks at least three
-            // cells across; keep the momentum with the last one rather than lose it.
-            let l = &mut self.links[MAX_PER_CELL - 1].1;
-            l[0] += p[0];
-            l[1] += p[1];
-            l[2] += p[2];
-        }
-    }
-}
-
-/// Per-grain hydrodynamic force and torque of one step, lattice units (momentum per step;
-/// torque about the grain's centre, per step).
-pub type GrainForce = [f64; 3];
+/// A recomputed cell that went bad: padded cell, the grain (view) it belongs to, density.
+pub type Unstable = (usize, u32, f64);
 
 /// The coupling state of one slab.
 pub struct Coupler {
     pub(super) scheme: Scheme,
     pub(super) refill: Refill,
     pub(super) frame: SlabFrame,
-    /// Covering grain per padded cell (bounce-back schemes).
+    /// Covering grain per padded cell (bounce-back schemes): an index into `owner_ids`.
     pub(super) owner: Vec<u32>,
     /// The map being built for the next step (kept for its allocation).
     pub(super) next_owner: Vec<u32>,
+    /// Ids and views of the grains `owner` refers to (the views of the last map).
+    pub(super) owner_ids: Vec<u64>,
     /// Cells (padded, halo included) set in `owner` and in `next_owner`.
     pub(super) touched: Vec<u32>,
     pub(super) next_touched: Vec<u32>,
-    /// Interior exterior-fluid cells with at least one covered neighbour, increasing index.
+    /// Interior exterior-fluid cells with at least one covered neighbour.
     pub(super) boundary: Vec<u32>,
-    /// Interior covered cells, increasing index.
+    /// Interior covered cells.
     pub(super) covered: Vec<u32>,
-    /// Solid fractions (partially saturated method).
+    /// Solid fractions (partially saturated method), grain by grain.
     pub(super) shares: Vec<Share>,
-    /// Cells refilled by the last remap (kept for its allocation).
-    pub(super) refills: Vec<(u32, [f64; Q])>,
-    /// Recomputed cells of the last exchange (kept for their allocation).
-    pub(super) updates: Vec<CellUpdate>,
-    /// Rest populations of the covered cells (kept for their allocation).
-    pub(super) rest: Vec<[f64; Q]>,
-    /// The shares of each cell (partially saturated method): indices into `shares`.
-    pub(super) runs: Vec<ShareRun>,
-    /// Per padded cell: its run in `runs`, or NONE (PSM), or whether it is listed in
-    /// `boundary` (bounce-back schemes).
-    pub(super) run_of: Vec<u32>,
+    /// Scratch marks per padded cell (all false between uses).
     pub(super) mark: Vec<bool>,
-    /// Force of the last exchange per grain.
-    pub(super) force: Vec<GrainForce>,
-    /// Momentum handed over by covering and uncovering since the last exchange.
-    pub(super) handover: Vec<GrainForce>,
+    /// Per padded cell: its cell in the PSM plan, or NONE (all NONE between uses).
+    pub(super) slot: Vec<u32>,
+    /// Per PSM plan cell: its shares (indices into `shares`) and how many.
+    pub(super) members: Vec<[u32; super::psm::MAX_PER_CELL]>,
+    pub(super) member_count: Vec<u8>,
+    /// The plans of the last exchange and where each link or share belongs.
+    pub(super) links: LinkPlan,
+    pub(super) link_owner: Vec<Owner>,
+    pub(super) psm: PsmPlan,
+    pub(super) share_owner: Vec<Owner>,
+    /// Momentum per link or share of the last exchange, and scratch lists.
+    pub(super) link_momentum: Vec<f64>,
+    pub(super) share_momentum: Vec<[f64; 2]>,
+    pub(super) rest: Vec<[f64; 2]>,
+    pub(super) offsets: Vec<u32>,
+    pub(super) candidates: Vec<u32>,
+    /// Plan cells grouped by row: indices into the cell list.
+    pub(super) order: Vec<u32>,
+    /// Cells changing hands in the last remap, and their refills and momenta.
+    pub(super) refills: Vec<crate::lbm::moving::Refill>,
+    pub(super) newly: Vec<u32>,
+    pub(super) cell_momentum: Vec<[f64; 2]>,
+    pub(super) refill_momentum: Vec<[f64; 2]>,
+    /// Cells changing hands: (cell, grain view, newly covered).
+    pub(super) events: Vec<(u32, u32, bool)>,
+    /// Loads of the last exchange and of the last remap's hand-over, per grain and column.
+    pub(super) sums: ColumnSums,
+    pub(super) handover: ColumnSums,
 }
 
 impl Coupler {
-    /// A coupler for `grains` grains on the slab `frame`. Place the grains with
-    /// [`Coupler::start`].
-    pub fn new(scheme: Scheme, refill: Refill, frame: SlabFrame, grains: usize) -> Self {
+    /// A coupler on the slab `frame`. Place the grains with [`Coupler::start`].
+    pub fn new(scheme: Scheme, refill: Refill, frame: SlabFrame) -> Self {
         let cells = frame.stride * (frame.ny + 2);
         Self {
-            refills: Vec::new(),
             scheme,
             refill,
             frame,
             owner: vec![NONE; cells],
             next_owner: vec![NONE; cells],
+            owner_ids: Vec::new(),
             touched: Vec::new(),
             next_touched: Vec::new(),
-            updates: Vec::new(),
-            rest: Vec::new(),
-            runs: Vec::new(),
-            run_of: vec![NONE; cells],
-            mark: vec![false; cells],
             boundary: Vec::new(),
             covered: Vec::new(),
             shares: Vec::new(),
-            force: vec![[0.0; 3]; grains],
-            handover: vec![[0.0; 3]; grains],
+            mark: vec![false; cells],
+            slot: vec![NONE; cells],
+            members: Vec::new(),
+            member_count: Vec::new(),
+            links: LinkPlan::default(),
+            link_owner: Vec::new(),
+            psm: PsmPlan::default(),
+            share_owner: Vec::new(),
+            link_momentum: Vec::new(),
+            share_momentum: Vec::new(),
+            rest: Vec::new(),
+            offsets: Vec::new(),
+            candidates: Vec::new(),
+            order: Vec::new(),
+            refills: Vec::new(),
+            newly: Vec::new(),
+            cell_momentum: Vec::new(),
+            refill_momentum: Vec::new(),
+            events: Vec::new(),
+            sums: ColumnSums::default(),
+            handover: ColumnSums::default(),
         }
     }
 
@@ -172,37 +164,30 @@ impl Coupler {
         self.scheme
     }
 
-    /// Place the grains on the lattice before the first step: build the maps and, for the
-    /// bounce-back schemes, fill the covered cells with equilibrium at the grain velocity.
-    pub fn start<T: Real>(&mut self, lat: &mut Lattice<T>, grains: &[GrainView]) {
-        self.map(lat, grains);
+    /// Place the grains (`views` with their `ids`, in increasing id) on the lattice before
+    /// the first step: build the maps and, unless the populations come from a checkpoint
+    /// (`fill_rest = false`), fill the covered cells with equilibrium at the grain velocity
+    /// (bounce-back schemes).
+    pub fn start<T: Real>(
+        &mut self,
+        fluid: &mut dyn FluidBackend<T>,
+        views: &[GrainView],
+        ids: &[u64],
+        fill_rest: bool,
+    ) {
+        self.map(fluid.lattice(), views);
         self.owner.clone_from(&self.next_owner);
         self.touched.clone_from(&self.next_touched);
-        self.rebuild_lists(lat);
-        if self.scheme != Scheme::Psm {
-            let plane = lat.plane();
-            let (owner, covered, frame) = (&self.owner, &self.covered, self.frame);
-            let buf = lat.current_buffer_mut();
-            for &k in covered {
-                let g = &grains[owner[k as usize] as usize];
-                let eq = rest_at::<T>(rigid_velocity(&frame, g, frame.centre(k as usize)));
-                for i in 0..Q {
-                    buf[i * plane + k as usize] = eq[i];
-                }
-            }
+        self.owner_ids.clear();
+        self.owner_ids.extend_from_slice(ids);
+        self.handover.reset(views, self.frame.global_nx);
+        self.rebuild_lists(fluid.lattice(), views);
+        if fill_rest {
+            self.fill_rest(fluid, views);
         }
     }
 
-    /// Force and torque on each grain from the last exchange plus any covering and
-    /// uncovering since, lattice units.
-    pub fn forces(&self) -> impl Iterator<Item = GrainForce> + '_ {
-        self.force
-            .iter()
-            .zip(&self.handover)
-            .map(|(f, h)| [f[0] + h[0], f[1] + h[1], f[2] + h[2]])
-    }
-
-    /// Cells covered by a grain now (bounce-back schemes), for output masks: padded indices.
+    /// Cells covered by a grain now (bounce-back schemes): padded indices.
     pub fn covered_cells(&self) -> &[u32] {
         &self.covered
     }
@@ -226,228 +211,80 @@ impl Coupler {
     }
 
     /// Build the next map (owners or shares) for the grains at their current positions.
-    pub(super) fn map<T: Real>(&mut self, lat: &Lattice<T>, grains: &[GrainView]) {
-        let fluid = |k: usize| lat.is_fluid_at(k);
+    pub(super) fn map<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         match self.scheme {
-            Scheme::Psm => shares(&self.frame, grains, fluid, &mut self.shares),
+            Scheme::Psm => self.map_shares(lat, views),
             _ => cover(
                 &self.frame,
-                grains,
-                fluid,
+                views,
+                |k| lat.is_fluid_at(k),
                 &mut self.next_owner,
                 &mut self.next_touched,
             ),
         }
     }
 
-    /// Covered and boundary cell lists from `owner`.
-    pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>) {
-        for &k in &self.boundary {
-            self.mark[k as usize] = false;
+    /// Stage "coupling", before the sweep: plan the cells at the grains' surfaces (links
+    /// for the bounce-back schemes, solid shares for PSM) from the maps of the last remap,
+    /// built for the grains `views`. Then let the fluid sweep with [`Coupler::moving`] and
+    /// collect the loads with [`Coupler::collect`].
+    pub fn plan<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
+        match self.scheme {
+            Scheme::Psm => self.plan_psm(lat, views),
+            _ => self.plan_links(lat, views),
         }
-        self.covered.clear();
-        self.boundary.clear();
+    }
+
+    /// The planned cells for the fluid's sweep, with where their momenta go.
+    pub fn moving(&mut self) -> MovingCells<'_> {
+        match self.scheme {
+            Scheme::Psm => MovingCells::Partial(&self.psm, &mut self.share_momentum),
+            _ => MovingCells::Links(&self.links, &mut self.link_momentum),
+        }
+    }
+
+    /// Stage "coupling", after the sweep: sum the momentum each grain received per column
+    /// (see [`Coupler::loads`]). `bad` is what the sweep reported (plan index, density); it
+    /// comes back as the first bad cell (padded cell, grain view, density).
+    pub fn collect(&mut self, views: &[GrainView], bad: Option<(usize, f64)>) -> Option<Unstable> {
+        self.sums.reset(views, self.frame.global_nx);
+        match self.scheme {
+            Scheme::Psm => self.collect_psm(views, bad),
+            _ => self.collect_links(views, bad),
+        }
+    }
+
+    /// The loads of the last exchange, per grain view and column.
+    pub fn loads(&self) -> &ColumnSums {
+        &self.sums
+    }
+
+    /// The loads of the last remap's hand-over of covered and uncovered cells.
+    pub fn handover_loads(&self) -> &ColumnSums {
+        &self.handover
+    }
+
+    /// Set the fluid under the grains (bounce-back schemes) to rest at the grains' velocity.
+    /// Nothing reads it: the sweep's values there are overwritten where they would reach
+    /// the fluid (boundary links) and ignored otherwise (refills read fluid neighbours), so
+    /// this is done at the start and before output only, for fields that show the grains.
+    pub fn fill_rest<T: Real>(&mut self, fluid: &mut dyn FluidBackend<T>, views: &[GrainView]) {
         if self.scheme == Scheme::Psm {
             return;
         }
-        let f = self.frame;
-        let interior = |k: usize| {
-            let (x, y) = f.local(k);
-            x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
-        };
-        // Every boundary cell neighbours a covered cell (halo ones included); each is listed
-        // once, in the order the covered cells were set (fixed).
-        for &k in &self.touched {
-            let k = k as usize;
-            if interior(k) {
-                self.covered.push(k as u32);
-            }
-            for i in 1..Q {
-                let n = neighbour(&f, k, i, 1);
-                if interior(n) && self.owner[n] == NONE && lat.is_fluid_at(n) && !self.mark[n] {
-                    self.mark[n] = true;
-                    self.boundary.push(n as u32);
-                }
-            }
-        }
-    }
-
-    /// Stage "coupling", fluid side: recompute the cells at the grains' surfaces in the
-    /// buffer the sweep just wrote, and record the momentum each grain receives. Call after
-    /// [`Lattice::stream_collide`] and before [`Lattice::update_boundaries`].
-    pub fn exchange<T: Real>(
-        &mut self,
-        lat: &mut Lattice<T>,
-        grains: &[GrainView],
-        ids: &[u64],
-    ) -> Result<(), CouplingError> {
-        for f in &mut self.force {
-            *f = [0.0; 3];
-        }
-        match self.scheme {
-            Scheme::Psm => self.exchange_psm(lat, grains, ids),
-            _ => self.exchange_links(lat, grains, ids),
-        }
-    }
-
-    fn exchange_links<T: Real>(
-        &mut self,
-        lat: &mut Lattice<T>,
-        grains: &[GrainView],
-        ids: &[u64],
-    ) -> Result<(), CouplingError> {
-        let f = self.frame;
-        let plane = lat.plane();
-        let interpolated = self.scheme == Scheme::Interpolated;
-        let step = lat.steps_done();
-        // Recompute each boundary cell from the previous buffer (read only, in parallel),
-        // then write them and sum the grains' forces in cell order (fixed, so the sums do
-        // not depend on the thread count).
-        let mut updates = std::mem::take(&mut self.updates);
-        {
-            let (lat, owner) = (&*lat, &self.owner);
-            let prev = lat.previous_buffer();
-            self.boundary
-                .par_iter()
-                .with_min_len(64)
-                .map(|&kb| {
-                    let k = kb as usize;
-                    let (x, y) = f.local(k);
-                    let mut h = lat.gather_previous(x as usize, y as usize);
-                    let centre = f.centre(k);
-                    let mut u = CellUpdate::new(kb);
-                    for i in 1..Q {
-                        let n = neighbour(&f, k, i, -1);
-                        let g = owner[n];
-                        if g == NONE {
-                            continue;
-                        }
-                        let grain = &grains[g as usize];
-                        let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                        let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
-                        let c = super::map::nearest_image(&f, grain, mid);
-                        let ub = GrainView {
-                            centre: c,
-                            ..*grain
-                        }
-                        .surface_velocity(mid);
-                        // Ladd 1994 moving-wall term 2 w_i ρ_w (c_i·u_b)/c_s², ρ_w = 1 (seed eq. 5.45).
-                        let ladd = 6.0 * W[i] * (cx * ub[0] + cy * ub[1]);
-                        let out_i = prev[OPP[i] * plane + k].to_f64();
-                        let hi = if interpolated {
-                            let q =
-                                super::geometry::link_fraction(centre, [-cx, -cy], c, grain.radius);
-                            let ff = neighbour(&f, k, i, 1);
-                            if q < 0.5 && lat.is_fluid_at(ff) && owner[ff] == NONE {
-                                // Bouzidi, Firdaouss & Lallemand 2001, eq. 5 (q < ½), moving wall.
-                                2.0 * q * out_i
-                                    + (1.0 - 2.0 * q) * prev[OPP[i] * plane + ff].to_f64()
-                                    + ladd
-                            } else if q >= 0.5 {
-                                // Bouzidi et al. 2001, eq. 5 (q ≥ ½).
-                                let same = prev[i * plane + k].to_f64();
-                                (out_i + (2.0 * q - 1.0) * same + ladd) / (2.0 * q)
-                            } else {
-                                out_i + ladd
-                            }
-                        } else {
-                            out_i + ladd
-                        };
-                        h[i] = T::from_f64(hi);
-                        // The grain receives −(f*_ī + f_i) c_i (seed eq. 5.47), torque about
-                        // its centre at the link's midpoint (eq. 5.48).
-                        let m = out_i + h[i].to_f64();
-                        let (px, py) = (-m * cx, -m * cy);
-                        let r = [mid[0] - c[0], mid[1] - c[1]];
-                        u.push(g, [px, py, r[0] * py - r[1] * px]);
-                    }
-                    let m = lat.collide_one(&mut h);
-                    u.rho = m.rho.to_f64();
-                    u.h = h.map(|v| v.to_f64());
-                    u
-                })
-                .collect_into_vec(&mut updates);
-        }
-        let bad = self.apply(lat, &updates);
-        self.updates = updates;
-        // The fluid under a grain rests at its velocity (read by nothing but the refill).
-        let owner = &self.owner;
-        let mut rest = std::mem::take(&mut self.rest);
+        let (f, owner) = (self.frame, &self.owner);
         self.covered
             .par_iter()
-            .with_min_len(256)
-            .map(|&k| {
-                let g = &grains[owner[k as usize] as usize];
-                rest_at::<f64>(rigid_velocity(&f, g, f.centre(k as usize)))
-            })
-            .collect_into_vec(&mut rest);
-        let buf = lat.current_buffer_mut();
-        for (&k, eq) in self.covered.iter().zip(&rest) {
-            for i in 0..Q {
-                buf[i * plane + k as usize] = T::from_f64(eq[i]);
-            }
-        }
-        self.rest = rest;
-        if let Some((k, density)) = bad {
-            return Err(self.unstable(step, k, density, grains, ids));
-        }
-        Ok(())
+            .with_min_len(1024)
+            .map(|&k| rigid_velocity(&f, &views[owner[k as usize] as usize], f.centre(k as usize)))
+            .collect_into_vec(&mut self.rest);
+        fluid.set_rest(&self.covered, &self.rest);
     }
 
-    /// Write recomputed cells and add their momentum to the grains, in list order. Returns
-    /// the first cell whose density is NaN or non-positive.
-    pub(super) fn apply<T: Real>(
-        &mut self,
-        lat: &mut Lattice<T>,
-        updates: &[CellUpdate],
-    ) -> Option<(usize, f64)> {
-        let plane = lat.plane();
-        let buf = lat.current_buffer_mut();
-        let mut bad = None;
-        for u in updates {
-            let k = u.cell as usize;
-            for i in 0..Q {
-                buf[i * plane + k] = T::from_f64(u.h[i]);
-            }
-            for &(g, p) in &u.links[..u.n as usize] {
-                let acc = &mut self.force[g as usize];
-                acc[0] += p[0];
-                acc[1] += p[1];
-                acc[2] += p[2];
-            }
-            if !(u.rho > 0.0) && bad.is_none() {
-                bad = Some((k, u.rho));
-            }
-        }
-        bad
-    }
-
-    pub(super) fn unstable(
-        &self,
-        step: u64,
-        k: usize,
-        density: f64,
-        grains: &[GrainView],
-        ids: &[u64],
-    ) -> CouplingError {
-        let p = self.frame.centre(k);
-        let nearest = (0..grains.len())
-            .min_by(|&a, &b| {
-                let d = |g: usize| {
-                    let c = super::map::nearest_image(&self.frame, &grains[g], p);
-                    (c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)
-                };
-                d(a).total_cmp(&d(b))
-            })
-            .unwrap_or(0);
-        let (x, y) = self.frame.local(k);
-        CouplingError::Unstable {
-            step,
-            x: (x + self.frame.x0 as i64) as usize,
-            y: y as usize,
-            grain: ids.get(nearest).copied().unwrap_or(0),
-            density,
-        }
+    /// Global column of padded cell `k`.
+    #[inline]
+    pub(super) fn column(&self, k: usize) -> usize {
+        (self.frame.local(k).0 + self.frame.x0 as i64) as usize
     }
 }
 
@@ -461,40 +298,6 @@ pub(super) fn rigid_velocity(f: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64;
 /// Padded index of the neighbour of `k` at `sign · c_i`.
 #[inline]
 pub(super) fn neighbour(f: &SlabFrame, k: usize, i: usize, sign: i64) -> usize {
+    use crate::lbm::d2q9::{CX, CY};
     (k as i64 + sign * (CX[i] as i64 + CY[i] as i64 * f.stride as i64)) as usize
-}
-
-/// Σ h_i c_i of padded cell `k`.
-pub(super) fn momentum<T: Real>(buf: &[T], plane: usize, k: usize) -> [f64; 2] {
-    let mut j = [0.0; 2];
-    for i in 1..Q {
-        let h = buf[i * plane + k].to_f64();
-        j[0] += h * CX[i] as f64;
-        j[1] += h * CY[i] as f64;
-    }
-    j
-}
-
-/// Density and velocity of shifted populations (no force correction).
-pub(super) fn moments_of(h: &[f64; Q]) -> Moments<f64> {
-    let drho: f64 = h.iter().sum();
-    let j = momentum(h, 1, 0);
-    let rho = 1.0 + drho;
-    Moments {
-        drho,
-        rho,
-        ux: j[0] / rho,
-        uy: j[1] / rho,
-    }
-}
-
-/// Shifted equilibrium at ρ = 1 and velocity u.
-pub(super) fn rest_at<T: Real>(u: [f64; 2]) -> [T; Q] {
-    equilibrium(&Moments {
-        drho: 0.0,
-        rho: 1.0,
-        ux: u[0],
-        uy: u[1],
-    })
-    .map(T::from_f64)
 }

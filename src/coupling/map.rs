@@ -176,7 +176,7 @@ pub fn nearest_image(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] 
 }
 
 /// One grain's share of one cell for the partially saturated method.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Share {
     /// Padded cell index.
     pub cell: u32,
@@ -188,43 +188,48 @@ pub struct Share {
     pub centre: [f64; 2],
 }
 
-/// Solid fractions of every interior plain-fluid cell a grain overlaps, grain by grain and
-/// row by row (a fixed order). Cells wholly inside or outside skip the exact area.
-pub fn shares(
+/// Visit the shares of grain `g` of `grains`: every interior plain-fluid cell it overlaps,
+/// image by image, in row order, with its exact solid fraction when `exact` (0 otherwise:
+/// the counting pass of a parallel build). Cells wholly inside or outside skip the exact
+/// area.
+pub fn for_shares(
     frame: &SlabFrame,
+    fluid: &impl Fn(usize) -> bool,
     grains: &[GrainView],
-    fluid: impl Fn(usize) -> bool,
-    out: &mut Vec<Share>,
+    g: usize,
+    exact: bool,
+    mut visit: impl FnMut(Share),
 ) {
-    out.clear();
-    for (g, grain) in grains.iter().enumerate() {
-        for c in frame.images(grain) {
-            frame.for_box(c, grain.radius, |k, x, y| {
-                if x < 0 || y < 0 || x >= frame.nx as i64 || y >= frame.ny as i64 || !fluid(k) {
-                    return;
-                }
-                let (gx, r) = ((x + frame.x0 as i64) as f64, grain.radius);
-                // Nearest and farthest points of the cell from the centre.
-                let near = |lo: f64, v: f64| (v - lo.max(v.min(lo + 1.0))).abs();
-                let far = |lo: f64, v: f64| (v - lo).abs().max((v - lo - 1.0).abs());
-                let (nx_, ny_) = (near(gx, c[0]), near(y as f64, c[1]));
+    let grain = &grains[g];
+    for c in frame.images(grain) {
+        frame.for_box(c, grain.radius, |k, x, y| {
+            if x < 0 || y < 0 || x >= frame.nx as i64 || y >= frame.ny as i64 || !fluid(k) {
+                return;
+            }
+            let (gx, r) = ((x + frame.x0 as i64) as f64, grain.radius);
+            // Nearest and farthest points of the cell from the centre.
+            let near = |lo: f64, v: f64| (v - lo.max(v.min(lo + 1.0))).abs();
+            let far = |lo: f64, v: f64| (v - lo).abs().max((v - lo - 1.0).abs());
+            let (nx_, ny_) = (near(gx, c[0]), near(y as f64, c[1]));
+            if nx_ * nx_ + ny_ * ny_ >= r * r {
+                return;
+            }
+            let fraction = if !exact {
+                0.0
+            } else {
                 let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
-                let e = if fx_ * fx_ + fy_ * fy_ <= r * r {
+                if fx_ * fx_ + fy_ * fy_ <= r * r {
                     1.0
-                } else if nx_ * nx_ + ny_ * ny_ >= r * r {
-                    0.0
                 } else {
                     cell_fraction(c, r, x + frame.x0 as i64, y)
-                };
-                if e > 0.0 {
-                    out.push(Share {
-                        cell: k as u32,
-                        grain: g as u32,
-                        fraction: e,
-                        centre: c,
-                    });
                 }
+            };
+            visit(Share {
+                cell: k as u32,
+                grain: g as u32,
+                fraction,
+                centre: c,
             });
-        }
+        });
     }
 }

@@ -5,21 +5,26 @@
 //! 1. `collide-stream`: the fluid sweep, unaware of grains (cells under grains are swept
 //!    as fluid and overwritten next);
 //! 2. `coupling`: [`Coupler::exchange`] recomputes the cells at the grains' surfaces with
-//!    the chosen scheme and sums each grain's hydrodynamic force and torque;
+//!    the chosen scheme and sums each grain's hydrodynamic force and torque per lattice
+//!    column; the owners add the columns in order (`sums.rs`, `ghosts.rs`);
 //! 3. `dem`: n_s DEM sub-steps with that force held (seed eq. 5.61), plus the optional
-//!    short-range repulsion; then [`Coupler::remap`] hands over the cells the grains covered
-//!    or uncovered;
+//!    short-range repulsion, then the ghost grains are exchanged; then [`Coupler::remap`]
+//!    hands over the cells the grains covered or uncovered;
 //! 4. `boundaries`: the fluid's halo refill.
 
 pub mod driver;
 pub mod exchange;
+mod gather;
 pub mod geometry;
+pub mod ghosts;
 mod handover;
+mod links;
 pub mod map;
 pub mod plan;
 mod psm;
+pub mod sums;
 
-pub use driver::LbmDem;
+pub use driver::{LbmDem, RestoredCoupling};
 pub use exchange::{Coupler, CouplingError};
 pub use plan::{plan, CouplingPlan};
 

@@ -2,111 +2,152 @@
 //! grain overlaps is collided as a blend of the fluid's operator and the solid's, weighted by
 //! the exact solid fraction.
 
-use super::exchange::{CellUpdate, Coupler, CouplingError, ShareRun, MAX_PER_CELL};
-use super::map::{GrainView, NONE};
-use crate::lbm::collision::{equilibrium, Moments};
-use crate::lbm::d2q9::{CX, CY, OPP, Q};
+use super::exchange::{Coupler, Owner, Unstable};
+use super::gather::{gather, gather2, group_by_row};
+use super::map::{for_shares, GrainView, NONE};
+use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
-use rayon::prelude::*;
+
+/// Most grains that can share one cell (disks at least three cells across).
+pub(super) const MAX_PER_CELL: usize = 8;
 
 impl Coupler {
-    pub(super) fn exchange_psm<T: Real>(
-        &mut self,
-        lat: &mut Lattice<T>,
-        grains: &[GrainView],
-        ids: &[u64],
-    ) -> Result<(), CouplingError> {
+    /// The solid fraction of every interior fluid cell each grain overlaps, grain by grain
+    /// (id order), each image's cells in row order; in parallel over the grains.
+    pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
+        let f = self.frame;
+        let fluid = |k: usize| lat.is_fluid_at(k);
+        gather(
+            views.len(),
+            &mut self.offsets,
+            &mut self.shares,
+            |g| {
+                let mut n = 0;
+                for_shares(&f, &fluid, views, g, false, |_| n += 1);
+                n
+            },
+            |g, out| {
+                let mut at = 0;
+                for_shares(&f, &fluid, views, g, true, |s| {
+                    out[at] = s;
+                    at += 1;
+                });
+            },
+        );
+    }
+
+    /// Group the shares by cell (cells in order of first appearance, then grouped by row;
+    /// each cell's shares in grain order) and plan the partially saturated collision.
+    pub(super) fn plan_psm<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let tau = lat.tau0();
-        let step = lat.steps_done();
-        // Group the shares by cell, cells in order of first appearance (fixed).
-        self.runs.clear();
+        let mut members = std::mem::take(&mut self.members);
+        let mut counts = std::mem::take(&mut self.member_count);
+        let mut cells = std::mem::take(&mut self.candidates);
+        members.clear();
+        counts.clear();
+        cells.clear();
         for (n, sh) in self.shares.iter().enumerate() {
-            let slot = &mut self.run_of[sh.cell as usize];
+            let slot = &mut self.slot[sh.cell as usize];
             if *slot == NONE {
-                *slot = self.runs.len() as u32;
-                self.runs.push(ShareRun {
-                    cell: sh.cell,
-                    shares: [0; MAX_PER_CELL],
-                    n: 0,
-                });
+                *slot = cells.len() as u32;
+                cells.push(sh.cell);
+                members.push([0; MAX_PER_CELL]);
+                counts.push(0);
             }
-            let run = &mut self.runs[*slot as usize];
-            if (run.n as usize) < MAX_PER_CELL {
-                run.shares[run.n as usize] = n as u32;
-                run.n += 1;
+            let c = *slot as usize;
+            if (counts[c] as usize) < MAX_PER_CELL {
+                members[c][counts[c] as usize] = n as u32;
+                counts[c] += 1;
             }
         }
-        for run in &self.runs {
-            self.run_of[run.cell as usize] = NONE;
+        for &k in &cells {
+            self.slot[k as usize] = NONE;
         }
-        let mut updates = std::mem::take(&mut self.updates);
-        {
-            let (lat, shares) = (&*lat, &self.shares);
-            self.runs
-                .par_iter()
-                .with_min_len(64)
-                .map(|sr| {
-                    let k = sr.cell as usize;
-                    let run = sr.shares[..sr.n as usize]
-                        .iter()
-                        .map(|&n| &shares[n as usize]);
-                    let (x, y) = f.local(k);
-                    let h = lat.gather_previous(x as usize, y as usize);
-                    let mut post = h;
-                    let m = lat.collide_one(&mut post);
-                    let m64 = Moments {
-                        drho: m.drho.to_f64(),
-                        rho: m.rho.to_f64(),
-                        ux: m.ux.to_f64(),
-                        uy: m.uy.to_f64(),
-                    };
-                    let eq_fluid = equilibrium(&m64);
-                    let hf: [f64; Q] = std::array::from_fn(|i| h[i].to_f64());
-                    let eps: f64 = run.clone().map(|s| s.fraction).sum();
-                    let eps_c = eps.min(1.0);
-                    // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
-                    let b_total = eps_c * (tau - 0.5) / ((1.0 - eps_c) + (tau - 0.5));
-                    let mut u = CellUpdate::new(k as u32);
-                    u.h = std::array::from_fn(|i| (1.0 - b_total) * post[i].to_f64());
-                    let centre = f.centre(k);
-                    for s in run {
-                        let grain = &grains[s.grain as usize];
-                        let bg = b_total * s.fraction / eps;
-                        let us = GrainView {
-                            centre: s.centre,
+        let plan = &mut self.psm;
+        group_by_row(
+            cells.len(),
+            f.ny,
+            |c| f.local(cells[c] as usize).1 as usize,
+            &mut plan.rows,
+            &mut self.order,
+        );
+        let (order, shares) = (&self.order, &self.shares);
+        let eps_of = |c: usize| -> f64 {
+            members[c][..counts[c] as usize]
+                .iter()
+                .map(|&s| shares[s as usize].fraction)
+                .sum()
+        };
+        plan.cells.clear();
+        plan.cells.extend(order.iter().map(|&o| cells[o as usize]));
+        plan.total.clear();
+        plan.total.extend(order.iter().map(|&o| {
+            let e = eps_of(o as usize).min(1.0);
+            // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
+            e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5))
+        }));
+        let (pcells, totals) = (&plan.cells, &plan.total);
+        gather2(
+            order.len(),
+            &mut plan.start,
+            &mut plan.shares,
+            &mut self.share_owner,
+            |c| counts[order[c] as usize] as usize,
+            |c, out, own| {
+                let o = order[c] as usize;
+                let m = &members[o][..counts[o] as usize];
+                let eps = eps_of(o);
+                let centre = f.centre(pcells[c] as usize);
+                for (j, &s) in m.iter().enumerate() {
+                    let sh = &shares[s as usize];
+                    let grain = &views[sh.grain as usize];
+                    out[j] = SolidShare {
+                        // A cell whose overlap rounds to nothing stays plain fluid.
+                        b: if eps > 0.0 {
+                            totals[c] * sh.fraction / eps
+                        } else {
+                            0.0
+                        },
+                        velocity: GrainView {
+                            centre: sh.centre,
                             ..*grain
                         }
-                        .surface_velocity(centre);
-                        let eq_solid = equilibrium(&Moments {
-                            ux: us[0],
-                            uy: us[1],
-                            ..m64
-                        });
-                        let mut p = [0.0; 2];
-                        for i in 0..Q {
-                            let j = OPP[i];
-                            // Noble & Torczynski 1998, eq. 8:
-                            // Ω^s_i = [f_ī − f^eq_ī(ρ, u)] − [f_i − f^eq_i(ρ, u_s)].
-                            let omega_s = (hf[j] - eq_fluid[j]) - (hf[i] - eq_solid[i]);
-                            u.h[i] += bg * (hf[i] + omega_s);
-                            p[0] += bg * omega_s * CX[i] as f64;
-                            p[1] += bg * omega_s * CY[i] as f64;
-                        }
-                        // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
-                        let r = [centre[0] - s.centre[0], centre[1] - s.centre[1]];
-                        u.push(s.grain, [-p[0], -p[1], -(r[0] * p[1] - r[1] * p[0])]);
-                    }
-                    u.rho = 1.0 + u.h.iter().sum::<f64>();
-                    u
-                })
-                .collect_into_vec(&mut updates);
+                        .surface_velocity(centre),
+                    };
+                    own[j] = Owner {
+                        grain: sh.grain,
+                        image_x: sh.centre[0],
+                        arm: [centre[0] - sh.centre[0], centre[1] - sh.centre[1]],
+                    };
+                }
+            },
+        );
+        self.members = members;
+        self.member_count = counts;
+        self.candidates = cells;
+    }
+
+    /// Add each share's momentum (as the sweep reported it) to its grain's column sums, in
+    /// plan order. Maps the first bad plan cell to (cell, grain, density).
+    pub(super) fn collect_psm(
+        &mut self,
+        views: &[GrainView],
+        bad: Option<(usize, f64)>,
+    ) -> Option<Unstable> {
+        for (c, &k) in self.psm.cells.iter().enumerate() {
+            let col = self.column(k as usize);
+            for s in self.psm.start[c] as usize..self.psm.start[c + 1] as usize {
+                let (o, p) = (&self.share_owner[s], self.share_momentum[s]);
+                let g = o.grain as usize;
+                // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
+                let load = [p[0], p[1], o.arm[0] * p[1] - o.arm[1] * p[0]];
+                self.sums.add(g, views[g].centre[0], o.image_x, col, load);
+            }
         }
-        let bad = self.apply(lat, &updates);
-        self.updates = updates;
-        if let Some((k, density)) = bad {
-            return Err(self.unstable(step, k, density, grains, ids));
-        }
-        Ok(())
+        bad.map(|(c, rho)| {
+            let s = self.psm.start[c] as usize;
+            (self.psm.cells[c] as usize, self.share_owner[s].grain, rho)
+        })
     }
 }

@@ -83,6 +83,7 @@ impl DemSystem {
         if self.spatial_sort && self.owned > 1 {
             order = cells.owned_order(self.owned);
             self.grains.permute_prefix(&order);
+            self.permute_extras(&order);
             cells.renumber(&order);
         }
         let g = &self.grains;

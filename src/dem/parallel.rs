@@ -258,12 +258,12 @@ impl SlabDem {
             for &i in &list {
                 g.pack(i as usize, &mut out);
             }
-            join(&out, &[])
+            join(&[&out, &[], &[]])
         });
         let got = self.exchange_varlen(comm, &msgs);
         let sys = &mut self.system;
         for (side, msg) in got.iter().enumerate() {
-            let (grains, _) = split(msg);
+            let [grains, _, _] = split(msg);
             for p in grains.chunks_exact(Grains::PACKED) {
                 sys.grains.push_packed(p);
             }

@@ -127,6 +127,14 @@ pub struct DemSystem {
     /// Force (N/m) and torque (N·m/m) from outside the DEM (the fluid) on each owned grain,
     /// held over the steps until it is set again; empty when nothing acts from outside.
     pub(crate) external: Vec<[f64; 3]>,
+    /// Whether [`DemSystem::set_external`] was ever called (the forces then travel with
+    /// their grains when they migrate).
+    pub(crate) external_on: bool,
+    /// Values that travel with each owned grain when it migrates or is reordered, `carry_width`
+    /// per grain (for state kept outside the DEM, e.g. a coupling's force history).
+    pub(crate) carry: Vec<f64>,
+    /// Values per grain in `carry` (0: none).
+    pub(crate) carry_width: usize,
 }
 
 impl DemSystem {
@@ -214,6 +222,9 @@ impl DemSystem {
             walls_built_at: Vec::new(),
             wall_hits: Vec::new(),
             external: Vec::new(),
+            external_on: false,
+            carry: Vec::new(),
+            carry_width: 0,
         })
     }
 
@@ -233,8 +244,9 @@ impl DemSystem {
             self.owned,
             "one external force per owned grain"
         );
-        if self.external.len() != self.owned {
+        if !self.external_on {
             self.external = vec![[0.0; 3]; self.owned];
+            self.external_on = true;
         }
         let g = &mut self.grains;
         for (i, (new, old)) in force.iter().zip(&mut self.external).enumerate() {
@@ -248,6 +260,95 @@ impl DemSystem {
     /// The external force and torque held on each owned grain (empty when none was set).
     pub fn external(&self) -> &[[f64; 3]] {
         &self.external
+    }
+
+    /// Restore the external force held on each owned grain (a restart), without touching
+    /// the forces of the last evaluation (which already include it).
+    pub fn restore_external(&mut self, force: Vec<[f64; 3]>) {
+        assert_eq!(
+            force.len(),
+            self.owned,
+            "one external force per owned grain"
+        );
+        self.external = force;
+        self.external_on = true;
+    }
+
+    /// Give every owned grain `width` values that travel with it (migration, reordering),
+    /// all zero. See [`DemSystem::carry`].
+    pub fn enable_carry(&mut self, width: usize) {
+        self.carry_width = width;
+        self.carry = vec![0.0; width * self.owned];
+    }
+
+    /// Owned grain `i`'s carried values.
+    pub fn carry(&self, i: usize) -> &[f64] {
+        let w = self.carry_width;
+        &self.carry[i * w..(i + 1) * w]
+    }
+
+    /// Owned grain `i`'s carried values, for writing.
+    pub fn carry_mut(&mut self, i: usize) -> &mut [f64] {
+        let w = self.carry_width;
+        &mut self.carry[i * w..(i + 1) * w]
+    }
+
+    /// Values per grain that travel beside [`Grains::pack`] when it migrates: the external
+    /// force (when on) and the carried values.
+    pub(crate) fn extras_width(&self) -> usize {
+        3 * self.external_on as usize + self.carry_width
+    }
+
+    /// Append owned grain `i`'s travelling values ([`DemSystem::extras_width`] of them).
+    pub(crate) fn pack_extras(&self, i: usize, out: &mut Vec<f64>) {
+        if self.external_on {
+            out.extend_from_slice(&self.external[i]);
+        }
+        out.extend_from_slice(self.carry(i));
+    }
+
+    /// Append a newly owned grain's travelling values (as packed by
+    /// [`DemSystem::pack_extras`]); call once per grain pushed, in the same order.
+    pub(crate) fn push_extras(&mut self, v: &[f64]) {
+        let mut v = v;
+        if self.external_on {
+            self.external.push([v[0], v[1], v[2]]);
+            v = &v[3..];
+        }
+        self.carry.extend_from_slice(&v[..self.carry_width]);
+    }
+
+    /// Keep the travelling values of owned grain i where `keep[i]` (as [`Grains::retain`]).
+    pub(crate) fn retain_extras(&mut self, keep: &[bool]) {
+        if self.external_on {
+            let mut k = keep.iter();
+            self.external.retain(|_| *k.next().unwrap_or(&true));
+        }
+        let w = self.carry_width;
+        if w > 0 {
+            let mut out = Vec::with_capacity(self.carry.len());
+            for (i, c) in self.carry.chunks_exact(w).enumerate() {
+                if keep.get(i).copied().unwrap_or(true) {
+                    out.extend_from_slice(c);
+                }
+            }
+            self.carry = out;
+        }
+    }
+
+    /// Reorder the travelling values like [`Grains::permute_prefix`].
+    pub(crate) fn permute_extras(&mut self, order: &[u32]) {
+        if self.external_on {
+            self.external = order.iter().map(|&o| self.external[o as usize]).collect();
+        }
+        let w = self.carry_width;
+        if w > 0 {
+            let mut out = Vec::with_capacity(self.carry.len());
+            for &o in order {
+                out.extend_from_slice(&self.carry[o as usize * w..(o as usize + 1) * w]);
+            }
+            self.carry = out;
+        }
     }
 
     /// Grains owned by this system (the first `owned()` of `grains`; the rest are ghosts).

@@ -120,6 +120,41 @@ impl<T: Real> GpuFluid<T> {
         self.ctx.queue.submit([]);
     }
 
+    /// Copy device buffer `b` to the host's buffer `b`.
+    pub(crate) fn pull(&mut self, b: usize) {
+        self.flush();
+        let per = self.split.planes_per_part() * self.host.plane;
+        for j in 0..self.split.parts {
+            let bytes = per * if self.f16 { 2 } else { T::BYTES };
+            let v = self.pops_from_bytes(&self.download(&self.pops[b][j], 0, bytes));
+            self.host.buf[b][j * per..(j + 1) * per].copy_from_slice(&v);
+        }
+    }
+
+    /// Copy both device buffers to the host.
+    pub(crate) fn pull_both(&mut self) {
+        self.pull(0);
+        self.pull(1);
+    }
+
+    /// Copy the host's current buffer to the device.
+    pub(crate) fn push_current(&mut self) {
+        let b = self.host.cur;
+        let per = self.split.planes_per_part() * self.host.plane;
+        for (j, buf) in self.pops[b].iter().enumerate() {
+            let values = &self.host.buf[b][j * per..(j + 1) * per];
+            self.ctx
+                .queue
+                .write_buffer(buf, 0, &self.pops_to_bytes(values));
+        }
+        self.ctx.queue.submit([]);
+    }
+
+    /// The host lattice (geometry; populations only after a pull).
+    pub(crate) fn host_mut(&mut self) -> &mut Lattice<T> {
+        &mut self.host
+    }
+
     /// Populations as the device stores them.
     fn pops_to_bytes(&self, values: &[T]) -> Vec<u8> {
         if !self.f16 {
@@ -486,15 +521,37 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
     }
 
     fn export_interior(&mut self) -> Vec<T> {
-        self.flush();
-        let cur = self.host.cur;
-        let per = self.split.planes_per_part() * self.host.plane;
-        for j in 0..self.split.parts {
-            let bytes = per * if self.f16 { 2 } else { T::BYTES };
-            let v = self.pops_from_bytes(&self.download(&self.pops[cur][j], 0, bytes));
-            self.host.buf[cur][j * per..(j + 1) * per].copy_from_slice(&v);
-        }
+        self.pull(self.host.cur);
         self.host.export_interior()
+    }
+
+    fn stream_collide_moving(
+        &mut self,
+        comm: &dyn Comm,
+        moving: &mut crate::lbm::moving::MovingCells<'_>,
+    ) -> Result<Option<(usize, f64)>, StepError> {
+        self.stream_collide(comm)?;
+        Ok(self.moving_cells(moving))
+    }
+
+    fn refresh_halos_full(&mut self, comm: &dyn Comm) {
+        self.halos_full(comm)
+    }
+
+    fn set_rest(&mut self, cells: &[u32], velocity: &[[f64; 2]]) {
+        self.rest(cells, velocity)
+    }
+
+    fn momentum_of_cells(&mut self, cells: &[u32], out: &mut Vec<[f64; 2]>) {
+        self.cell_momenta(cells, out)
+    }
+
+    fn apply_refills(
+        &mut self,
+        refills: &[crate::lbm::moving::Refill],
+        momentum: &mut Vec<[f64; 2]>,
+    ) {
+        self.refills(refills, momentum)
     }
 
     fn import_interior(&mut self, data: &[T], step: u64) {

@@ -5,6 +5,7 @@
 pub mod buffers;
 pub mod context;
 pub mod fluid;
+mod moving;
 
 pub use context::{list_adapters, AdapterSummary, GpuContext, GpuError};
 pub use fluid::GpuFluid;

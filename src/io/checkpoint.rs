@@ -70,7 +70,21 @@ pub fn write<T: H5Type + Copy>(
     lattice: &LatticeState<'_, T>,
     run: &RunState,
 ) -> Result<(), OutputError> {
-    write_atomically(path, comm, &|file, access| fill(file, access, lattice, run))
+    write_with(path, comm, lattice, run, &|_, _| Ok(()))
+}
+
+/// [`write`] plus the groups `more` adds (another physics' state). Collective.
+pub fn write_with<T: H5Type + Copy>(
+    path: &Path,
+    comm: &dyn Comm,
+    lattice: &LatticeState<'_, T>,
+    run: &RunState,
+    more: &dyn Fn(&hdf5::File, Access) -> hdf5::Result<()>,
+) -> Result<(), OutputError> {
+    write_atomically(path, comm, &|file, access| {
+        fill(file, access, lattice, run)?;
+        more(file, access)
+    })
 }
 
 /// Create `path.tmp` on every rank, let `fill` write it (collectively), then fsync it and
@@ -197,6 +211,8 @@ pub struct Restored<T> {
     pub run: RunState,
     /// This rank's interior populations, `[9][ny][width]`.
     pub populations: Vec<T>,
+    /// Whether the file also holds grains (a coupled run's checkpoint).
+    pub grains: bool,
 }
 
 /// Read a checkpoint for a run of precision `precision` on a `global` lattice, this rank
@@ -338,6 +354,7 @@ pub fn read<T: H5Type + Copy + Default>(
             series: restored,
         },
         populations,
+        grains: file.group("dem").is_ok(),
     })
 }
 

@@ -6,7 +6,7 @@
 //! tangential springs and uses the half-step velocities, which are gone: with the stored
 //! forces a restarted run continues bit for bit.
 
-use super::checkpoint::{open_checked, write_atomically, write_header};
+use super::checkpoint::{open_checked, write_atomically, write_header, CheckedFile};
 use super::h5par::{write_rows, Access};
 use super::OutputError;
 use crate::dem::system::HistoryMap;
@@ -48,7 +48,7 @@ pub struct RestoredGrains {
     /// Pair and wall contact history.
     pub history: HistoryMap,
     /// Per wall: a, b, removed.
-    pub walls: Vec<([f64; 2], [f64; 2], bool)>,
+    pub walls: WallStates,
 }
 
 fn err(path: &Path, message: impl Into<String>) -> OutputError {
@@ -65,6 +65,34 @@ pub fn write(
     d: &SlabDem,
     run: &GrainRunState,
 ) -> Result<(), OutputError> {
+    let mut migrated = [run.migrated as f64];
+    comm.sum_f64(&mut migrated);
+    let fill = |file: &hdf5::File, access: Access| -> hdf5::Result<()> {
+        write_header(
+            file,
+            (FORMAT, FORMAT_VERSION),
+            &[("step", run.step), ("settle_steps", run.settle_steps)],
+            &[
+                ("time_s", run.time_s),
+                ("next_output_s", run.next_output_s),
+                ("migrated", migrated[0]),
+            ],
+        )?;
+        write_dem(file, access, d, &run.initial, comm)
+    };
+    write_atomically(path, comm, &fill)
+}
+
+/// The `/dem` group: every owned grain with the forces of its last evaluation (each rank
+/// its rows), each live contact's history once, the walls and `initial` (rank 0's rows).
+/// Collective.
+pub fn write_dem(
+    file: &hdf5::File,
+    access: Access,
+    d: &SlabDem,
+    initial: &[f64],
+    comm: &dyn Comm,
+) -> hdf5::Result<()> {
     let sys = &d.system;
     let g = &sys.grains;
     let mut rows = Vec::with_capacity(sys.owned() * ROW);
@@ -82,35 +110,20 @@ pub fn write(
     for w in &sys.walls {
         walls.extend_from_slice(&[w.a[0], w.a[1], w.b[0], w.b[1], w.removed as u8 as f64]);
     }
-    let mut migrated = [run.migrated as f64];
-    comm.sum_f64(&mut migrated);
-    let fill = |file: &hdf5::File, access: Access| -> hdf5::Result<()> {
-        write_header(
-            file,
-            (FORMAT, FORMAT_VERSION),
-            &[("step", run.step), ("settle_steps", run.settle_steps)],
-            &[
-                ("time_s", run.time_s),
-                ("next_output_s", run.next_output_s),
-                ("migrated", migrated[0]),
-            ],
-        )?;
-        let dem = file.create_group("dem")?;
-        write_rows(&dem, "grains", &rows, ROW, comm, access)?;
-        write_rows(&dem, "history", &history, 3, comm, access)?;
-        // Identical on every rank: rank 0's rows only.
-        let root_only = |v: &[f64]| {
-            if comm.is_root() {
-                v.to_vec()
-            } else {
-                Vec::new()
-            }
-        };
-        write_rows(&dem, "walls", &root_only(&walls), 5, comm, access)?;
-        write_rows(&dem, "initial", &root_only(&run.initial), 3, comm, access)?;
-        Ok(())
+    let dem = file.create_group("dem")?;
+    write_rows(&dem, "grains", &rows, ROW, comm, access)?;
+    write_rows(&dem, "history", &history, 3, comm, access)?;
+    // Identical on every rank: rank 0's rows only.
+    let root_only = |v: &[f64]| {
+        if comm.is_root() {
+            v.to_vec()
+        } else {
+            Vec::new()
+        }
     };
-    write_atomically(path, comm, &fill)
+    write_rows(&dem, "walls", &root_only(&walls), 5, comm, access)?;
+    write_rows(&dem, "initial", &root_only(initial), 3, comm, access)?;
+    Ok(())
 }
 
 /// Read a grains checkpoint (every rank reads everything). `walls` is the scene's wall
@@ -118,6 +131,32 @@ pub fn write(
 pub fn read(path: &Path, comm: &dyn Comm, walls: usize) -> Result<RestoredGrains, OutputError> {
     let c = open_checked(path, comm, (FORMAT, FORMAT_VERSION), "a grains")?;
     let (u, f) = (|n: &str| c.u64(n), |n: &str| c.f64(n));
+    let (grains, history, walls) = read_dem(&c, path, walls)?;
+    Ok(RestoredGrains {
+        run: GrainRunState {
+            step: u("step")?,
+            time_s: f("time_s")?,
+            next_output_s: f("next_output_s")?,
+            settle_steps: u("settle_steps")?,
+            migrated: f("migrated")? as u64,
+            initial: c.rows("dem/initial", 3)?,
+        },
+        grains,
+        history,
+        walls,
+    })
+}
+
+/// Wall ends and removal flags as a checkpoint holds them.
+pub type WallStates = Vec<([f64; 2], [f64; 2], bool)>;
+
+/// The `/dem` group of an open checkpoint: every grain sorted by id (with its forces), the
+/// contact history and the walls, which must be `walls` many.
+pub fn read_dem(
+    c: &CheckedFile<'_>,
+    path: &Path,
+    walls: usize,
+) -> Result<(Grains, HistoryMap, WallStates), OutputError> {
     let data = |n: &str, cols: usize| c.rows(&format!("dem/{n}"), cols);
     let rows = data("grains", ROW)?;
     let mut sorted: Vec<&[f64]> = rows.chunks_exact(ROW).collect();
@@ -148,19 +187,7 @@ pub fn read(path: &Path, comm: &dyn Comm, walls: usize) -> Result<RestoredGrains
         .chunks_exact(5)
         .map(|w| ([w[0], w[1]], [w[2], w[3]], w[4] != 0.0))
         .collect();
-    Ok(RestoredGrains {
-        run: GrainRunState {
-            step: u("step")?,
-            time_s: f("time_s")?,
-            next_output_s: f("next_output_s")?,
-            settle_steps: u("settle_steps")?,
-            migrated: f("migrated")? as u64,
-            initial: data("initial", 3)?,
-        },
-        grains,
-        history,
-        walls,
-    })
+    Ok((grains, history, walls))
 }
 
 /// Apply restored wall ends and removal flags to `walls` (in scene order).

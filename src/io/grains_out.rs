@@ -21,21 +21,26 @@ pub struct GrainWriter {
     root: bool,
     /// (group, time, grain count) of every snapshot written.
     written: Vec<(String, f64, u64)>,
+    /// The grains of a coupled run: snapshots also hold `hydrodynamic_force`.
+    coupled: bool,
 }
 
 /// Per-grain datasets of a snapshot: name, components, units. Each snapshot also holds
-/// `id` and `contacts` (the contact network, one row per touching pair).
-const DATASETS: [(&str, usize, &str); 6] = [
+/// `id` and `contacts` (the contact network, one row per touching pair); a coupled run's
+/// also `hydrodynamic_force` (the last entry).
+const DATASETS: [(&str, usize, &str); 7] = [
     ("position", 3, "m"),
     ("velocity", 3, "m/s"),
     ("radius", 1, "m"),
     ("angular_velocity", 1, "rad/s"),
     ("contact_force", 3, "N/m"),
     ("speed", 1, "m/s"),
+    ("hydrodynamic_force", 3, "N/m"),
 ];
 
 impl GrainWriter {
-    /// Open `dir/grains.h5` on every rank of `comm`. Collective.
+    /// Open `dir/grains.h5` on every rank of `comm`; `coupled` for the grains of a fluid
+    /// run. Collective.
     ///
     /// With `resume_after = None` the file is created (truncating an old one). With
     /// `Some(step)` (a restart) an existing file is kept: its snapshots up to `step` stay and
@@ -44,6 +49,7 @@ impl GrainWriter {
         dir: &Path,
         comm: &dyn Comm,
         resume_after: Option<u64>,
+        coupled: bool,
     ) -> Result<Self, OutputError> {
         let path = dir.join("grains.h5");
         let h5 = |source| OutputError::Hdf5 {
@@ -57,6 +63,7 @@ impl GrainWriter {
             access,
             root: comm.is_root(),
             written: Vec::new(),
+            coupled,
         };
         if kept.is_some() {
             w.written = h5par::kept_snapshots(&w.file, kept).map_err(h5)?;
@@ -67,11 +74,24 @@ impl GrainWriter {
         Ok(w)
     }
 
-    /// Write group `/step_NNNNNNNN` with every owned grain of every rank: position and
-    /// velocity (3 components, z = 0, as ParaView expects), radius, angular velocity,
-    /// contact force (the net force minus gravity and global damping) and speed, plus `id`.
-    /// Then flush and rewrite the XDMF. Collective.
+    /// Write group `/step_NNNNNNNN` (the DEM's step) with every owned grain of every rank:
+    /// position and velocity (3 components, z = 0, as ParaView expects), radius, angular
+    /// velocity, contact force (the net force minus gravity, global damping and any force
+    /// held from outside) and speed, plus `id`. Then flush and rewrite the XDMF. Collective.
     pub fn write(&mut self, sys: &DemSystem, comm: &dyn Comm) -> Result<(), OutputError> {
+        self.write_at(sys, comm, sys.steps, &[])
+    }
+
+    /// [`GrainWriter::write`] as `/step_NNNNNNNN` of `step` (a coupled run's fluid step, so
+    /// that grains and fields pair up), with each owned grain's `hydrodynamic` force (N/m;
+    /// written when the writer is `coupled`). Collective.
+    pub fn write_at(
+        &mut self,
+        sys: &DemSystem,
+        comm: &dyn Comm,
+        step: u64,
+        hydrodynamic: &[[f64; 3]],
+    ) -> Result<(), OutputError> {
         let h5 = |source| OutputError::Hdf5 {
             path: self.path.clone(),
             source,
@@ -82,18 +102,19 @@ impl GrainWriter {
         let total = counts.iter().sum::<f64>() as u64;
         let offset = offset as u64;
         let g = &sys.grains;
-        let group = format!("step_{:08}", sys.steps);
+        let group = format!("step_{step:08}");
         if self.written.iter().any(|w| w.0 == group) {
             return Ok(());
         }
         let grp = self.file.create_group(&group).map_err(h5)?;
-        for (name, value) in [("time_s", sys.time), ("step", sys.steps as f64)] {
+        for (name, value) in [("time_s", sys.time), ("step", step as f64)] {
             grp.new_attr::<f64>()
                 .create(name)
                 .and_then(|a| a.write_scalar(&value))
                 .map_err(h5)?;
         }
-        for (name, comps, units) in DATASETS {
+        let external = sys.external();
+        for (name, comps, units) in self.datasets().iter().copied() {
             let mut v = Vec::with_capacity(n * comps);
             for i in 0..n {
                 match name {
@@ -103,11 +124,16 @@ impl GrainWriter {
                     "angular_velocity" => v.push(g.omega[i]),
                     "contact_force" => {
                         let body = |v: f64, gr: f64| g.m[i] * (gr - sys.global_damping * v);
+                        let e = external.get(i).copied().unwrap_or([0.0; 3]);
                         v.extend_from_slice(&[
-                            g.fx[i] - body(g.vx[i], sys.gravity[0]),
-                            g.fy[i] - body(g.vy[i], sys.gravity[1]),
+                            g.fx[i] - body(g.vx[i], sys.gravity[0]) - e[0],
+                            g.fy[i] - body(g.vy[i], sys.gravity[1]) - e[1],
                             0.0,
                         ]);
+                    }
+                    "hydrodynamic_force" => {
+                        let h = hydrodynamic.get(i).copied().unwrap_or([0.0; 3]);
+                        v.extend_from_slice(&[h[0], h[1], 0.0]);
                     }
                     _ => v.push(g.vx[i].hypot(g.vy[i])),
                 }
@@ -192,6 +218,15 @@ impl GrainWriter {
         self.written.len()
     }
 
+    /// The per-grain datasets this writer writes.
+    fn datasets(&self) -> &'static [(&'static str, usize, &'static str)] {
+        if self.coupled {
+            &DATASETS
+        } else {
+            &DATASETS[..DATASETS.len() - 1]
+        }
+    }
+
     /// XDMF 2 temporal collection of Polyvertex grids (points).
     fn write_xdmf(&self) -> Result<(), OutputError> {
         let mut s = String::from("<?xml version=\"1.0\" ?>\n<Xdmf Version=\"2.0\">\n <Domain>\n  <Grid Name=\"grains\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
@@ -201,7 +236,7 @@ impl GrainWriter {
                 "   ",
                 group,
                 ("grains.h5", group, *n),
-                &DATASETS,
+                self.datasets(),
             );
             let _ = write!(s, "    <Time Value=\"{t:e}\"/>\n   </Grid>\n");
         }

@@ -3,6 +3,7 @@
 
 use super::fields::Fields;
 use super::lattice::{Lattice, StepError};
+use super::moving::{MovingCells, Refill};
 use super::real::Real;
 use decomposition::Comm;
 
@@ -20,11 +21,25 @@ pub trait FluidBackend<T: Real> {
     fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError>;
     /// Refill local halos (periodic, free-slip, outflow).
     fn update_boundaries(&mut self);
-    /// The host lattice with current populations, for boundary rules outside the fluid
-    /// core (grain coupling); `None` on a device backend.
-    fn host_lattice_mut(&mut self) -> Option<&mut Lattice<T>> {
-        None
-    }
+    /// [`FluidBackend::stream_collide`] with the cells of moving surfaces (see
+    /// [`super::moving`]) recomputed after the sweep; one momentum per link or share in
+    /// `moving`. Returns the plan index and density of the first such cell (on this rank)
+    /// that went bad. Collective.
+    fn stream_collide_moving(
+        &mut self,
+        comm: &dyn Comm,
+        moving: &mut MovingCells<'_>,
+    ) -> Result<Option<(usize, f64)>, StepError>;
+    /// Make every halo cell of the current state hold its neighbour's whole cell: the local
+    /// faces refilled (periodic, free-slip, outflow) and all nine populations of the
+    /// neighbours' edge columns across rank faces. Collective.
+    fn refresh_halos_full(&mut self, comm: &dyn Comm);
+    /// Set cells to the equilibrium at ρ = 1 and their velocity.
+    fn set_rest(&mut self, cells: &[u32], velocity: &[[f64; 2]]);
+    /// Σ h_i c_i of each cell of the current state.
+    fn momentum_of_cells(&mut self, cells: &[u32], out: &mut Vec<[f64; 2]>);
+    /// Rebuild cells a surface has uncovered; the momentum of each new cell.
+    fn apply_refills(&mut self, refills: &[Refill], momentum: &mut Vec<[f64; 2]>);
     /// Scale every Zou–He velocity face from the next step on (start-up ramps).
     fn set_inlet_scale(&mut self, factor: f64);
     /// Make sure no instability has happened so far (before output that must be good).
@@ -57,8 +72,25 @@ impl<T: Real> FluidBackend<T> for Lattice<T> {
     fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
         Lattice::stream_collide(self, comm)
     }
-    fn host_lattice_mut(&mut self) -> Option<&mut Lattice<T>> {
-        Some(self)
+    fn stream_collide_moving(
+        &mut self,
+        comm: &dyn Comm,
+        moving: &mut MovingCells<'_>,
+    ) -> Result<Option<(usize, f64)>, StepError> {
+        Lattice::stream_collide_moving(self, comm, moving)
+    }
+    fn refresh_halos_full(&mut self, comm: &dyn Comm) {
+        Lattice::update_boundaries(self);
+        self.refresh_exchange_full(comm);
+    }
+    fn set_rest(&mut self, cells: &[u32], velocity: &[[f64; 2]]) {
+        Lattice::set_rest(self, cells, velocity)
+    }
+    fn momentum_of_cells(&mut self, cells: &[u32], out: &mut Vec<[f64; 2]>) {
+        Lattice::momentum_of_cells(self, cells, out)
+    }
+    fn apply_refills(&mut self, refills: &[Refill], momentum: &mut Vec<[f64; 2]>) {
+        Lattice::apply_refills(self, refills, momentum)
     }
     fn update_boundaries(&mut self) {
         Lattice::update_boundaries(self)

@@ -7,7 +7,23 @@
 use super::collision::{family, Collider, Collision, MomentCollider, Moments};
 use super::d2q9::Q;
 use super::lattice::{Lattice, FLUID};
+use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
+use rayon::prelude::*;
+
+/// A destination pointer shared by row tasks that write disjoint rows.
+#[derive(Clone, Copy)]
+struct RowPtr<T>(*mut T);
+// SAFETY: tasks write disjoint rows (see `run_rows`).
+unsafe impl<T> Send for RowPtr<T> {}
+unsafe impl<T> Sync for RowPtr<T> {}
+
+impl<T> RowPtr<T> {
+    /// The pointer (a method, so closures capture the whole `Send` wrapper).
+    fn get(&self) -> *mut T {
+        self.0
+    }
+}
 
 impl<T: Real> Lattice<T> {
     /// Padded linear index of interior cell (x, y) (x, y may be −1 or nx, ny: the halo).
@@ -79,6 +95,56 @@ impl<T: Real> Lattice<T> {
             Collision::Trt { .. } => go!(family::TRT),
             Collision::Mrt { .. } => go!(family::MRT),
         }
+    }
+
+    /// Recompute the cells of `moving` from the previous buffer into the current one with
+    /// the lattice's operator, as a sweep would have (for a backend that swept elsewhere).
+    /// Returns the plan index and density of the first cell that went bad.
+    pub fn apply_moving(&mut self, moving: &mut MovingCells<'_>) -> Option<(usize, f64)> {
+        let run = MovingRun::new(moving, [None, None])?;
+        let p = self.params;
+        let forced = p.force[0] != T::default() || p.force[1] != T::default();
+        macro_rules! go {
+            ($fam:expr) => {
+                match (self.smagorinsky, forced) {
+                    (false, false) => {
+                        self.run_rows(&MomentCollider::<T, false, { $fam }, false>(p), &run)
+                    }
+                    (false, true) => {
+                        self.run_rows(&MomentCollider::<T, false, { $fam }, true>(p), &run)
+                    }
+                    (true, false) => {
+                        self.run_rows(&MomentCollider::<T, true, { $fam }, false>(p), &run)
+                    }
+                    (true, true) => {
+                        self.run_rows(&MomentCollider::<T, true, { $fam }, true>(p), &run)
+                    }
+                }
+            };
+        }
+        match self.collision {
+            Collision::Bgk => go!(family::BGK),
+            Collision::Trt { .. } => go!(family::TRT),
+            Collision::Mrt { .. } => go!(family::MRT),
+        }
+        let n = run.first_bad()?;
+        Some((n, self.density_at(run.cells()[n] as usize)))
+    }
+
+    /// Every row of `run`, in parallel, from the previous buffer into the current one.
+    fn run_rows<C: Collider<T>>(&mut self, c: &C, run: &MovingRun<'_>) {
+        let mut cur = std::mem::take(&mut self.buf[self.cur]);
+        let dst = RowPtr(cur.as_mut_ptr());
+        {
+            let this = &*self;
+            let src = this.previous_buffer();
+            (0..this.ny).into_par_iter().for_each(|y| {
+                // SAFETY: each task owns its row of the current buffer; plan cells are
+                // listed once.
+                unsafe { run.row(this, c, src, dst.get(), y, false) };
+            });
+        }
+        self.buf[self.cur] = cur;
     }
 
     /// Face conditions (west, east, south, north) of this slab.

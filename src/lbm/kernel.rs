@@ -4,7 +4,8 @@ use super::collision::{family, Collider, Collision, MomentCollider};
 use super::d2q9::{CX, CY, Q};
 use super::forces::reduce_forces;
 use super::lanes::Lanes;
-use super::lattice::{Lattice, StepError, HALO_DIRS};
+use super::lattice::{FaceCondition, Lattice, StepError, HALO_DIRS};
+use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
 use decomposition::{Comm, Side, SingleProcess};
 use rayon::prelude::*;
@@ -61,17 +62,35 @@ impl<T: Real> Lattice<T> {
     /// Errors when a fluid cell's density becomes NaN or non-positive on any rank; every
     /// rank then still holds the last good state.
     pub fn stream_collide(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
+        self.stream_collide_moving(comm, &mut MovingCells::None)
+            .map(|_| ())
+    }
+
+    /// [`Lattice::stream_collide`], recomputing the cells of moving surfaces in `moving`
+    /// right after their row is swept (see [`super::moving`]). Returns the plan index and
+    /// density of the first such cell that went NaN or non-positive (on this rank).
+    pub fn stream_collide_moving(
+        &mut self,
+        comm: &dyn Comm,
+        moving: &mut MovingCells<'_>,
+    ) -> Result<Option<(usize, f64)>, StepError> {
         if self.step == 0 {
             self.fill_halo();
         }
+        let exchange = |f: &FaceCondition| *f == FaceCondition::Exchange;
+        let edge = [
+            exchange(&self.faces[0]).then_some(0),
+            exchange(&self.faces[1]).then_some(self.nx - 1),
+        ];
+        let run = MovingRun::new(moving, edge);
         self.pack_halo();
         let mut halo = std::mem::take(&mut self.halo);
-        let waited = halo.exchange(comm, &mut || self.sweep_part(Part::Inner));
+        let waited = halo.exchange(comm, &mut || self.sweep_part(Part::Inner, run.as_ref()));
         self.halo = halo;
         self.halo_wait_s += waited;
         if self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some() {
             self.unpack_halo();
-            self.sweep_part(Part::Edge);
+            self.sweep_part(Part::Edge, run.as_ref());
         }
         let bad_row = self.row_bad.iter().position(|&b| b != 0);
         if comm.size() > 1 {
@@ -83,7 +102,10 @@ impl<T: Real> Lattice<T> {
         }
         self.step += 1;
         self.cur ^= 1;
-        Ok(())
+        Ok(run.and_then(|r| {
+            let n = r.first_bad()?;
+            Some((n, self.density_at(r.cells()[n] as usize)))
+        }))
     }
 
     /// Total momentum-exchange force (lattice units) on every solid during the last step,
@@ -109,6 +131,51 @@ impl<T: Real> Lattice<T> {
         if self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some() {
             self.unpack_halo();
         }
+    }
+
+    /// Fill the exchanged x halos of the current buffer with all nine populations of the
+    /// neighbours' edge columns, for rules that read whole neighbour cells (refilling a
+    /// cell a moving surface uncovered). Collective when the slab has neighbours.
+    pub fn refresh_exchange_full(&mut self, comm: &dyn Comm) {
+        let peers = [Side::Left, Side::Right].map(|s| self.halo.peer(s).is_some());
+        if !peers[0] && !peers[1] {
+            return;
+        }
+        let (nx, stride, plane, rows) = (self.nx, self.stride, self.plane, self.ny + 2);
+        let per = Q * rows * T::BYTES;
+        self.halo.set_message_bytes(per);
+        let src = &self.buf[self.cur];
+        for (side, xp) in [(Side::Left, 1), (Side::Right, nx)] {
+            if self.halo.peer(side).is_none() {
+                continue;
+            }
+            let out = self.halo.send_mut(side);
+            let mut at = 0;
+            for i in 0..Q {
+                for yp in 0..rows {
+                    src[i * plane + yp * stride + xp].put_le(&mut out[at..]);
+                    at += T::BYTES;
+                }
+            }
+        }
+        let mut halo = std::mem::take(&mut self.halo);
+        self.halo_wait_s += halo.exchange(comm, &mut || {});
+        self.halo = halo;
+        let dst = &mut self.buf[self.cur];
+        for (side, xp) in [(Side::Left, 0), (Side::Right, nx + 1)] {
+            if self.halo.peer(side).is_none() {
+                continue;
+            }
+            let data = self.halo.recv(side);
+            let mut at = 0;
+            for i in 0..Q {
+                for yp in 0..rows {
+                    dst[i * plane + yp * stride + xp] = T::get_le(&data[at..]);
+                    at += T::BYTES;
+                }
+            }
+        }
+        self.halo.set_message_bytes(HALO_DIRS * rows * T::BYTES);
     }
 
     /// Copy the populations that leave each exchanged face (3 of 9, the full padded
@@ -150,23 +217,28 @@ impl<T: Real> Lattice<T> {
         }
     }
 
-    /// One parallel pass over the rows, for the cells of `part`.
-    fn sweep_part(&mut self, part: Part) {
+    /// One parallel pass over the rows, for the cells of `part` (and the moving-surface
+    /// cells of those rows).
+    fn sweep_part(&mut self, part: Part, moving: Option<&MovingRun<'_>>) {
         let p = self.params;
         let forced = p.force[0] != T::default() || p.force[1] != T::default();
         macro_rules! dispatch {
             ($fam:expr) => {
                 match (self.smagorinsky, forced) {
-                    (false, false) => {
-                        self.sweep(&MomentCollider::<T, false, { $fam }, false>(p), part)
-                    }
+                    (false, false) => self.sweep(
+                        &MomentCollider::<T, false, { $fam }, false>(p),
+                        part,
+                        moving,
+                    ),
                     (false, true) => {
-                        self.sweep(&MomentCollider::<T, false, { $fam }, true>(p), part)
+                        self.sweep(&MomentCollider::<T, false, { $fam }, true>(p), part, moving)
                     }
                     (true, false) => {
-                        self.sweep(&MomentCollider::<T, true, { $fam }, false>(p), part)
+                        self.sweep(&MomentCollider::<T, true, { $fam }, false>(p), part, moving)
                     }
-                    (true, true) => self.sweep(&MomentCollider::<T, true, { $fam }, true>(p), part),
+                    (true, true) => {
+                        self.sweep(&MomentCollider::<T, true, { $fam }, true>(p), part, moving)
+                    }
                 }
             };
         }
@@ -178,7 +250,7 @@ impl<T: Real> Lattice<T> {
     }
 
     /// One parallel pass over all rows for the cells of `part`.
-    fn sweep<C: Collider<T>>(&mut self, c: &C, part: Part) {
+    fn sweep<C: Collider<T>>(&mut self, c: &C, part: Part, moving: Option<&MovingRun<'_>>) {
         let mut dst = std::mem::take(&mut self.buf[self.cur ^ 1]);
         let writer = RowWriter(dst.as_mut_ptr());
         let ns = self.forces.solids();
@@ -234,6 +306,11 @@ impl<T: Real> Lattice<T> {
                     b |= !(m.rho > T::default());
                 }
                 store_fence();
+                if let Some(run) = moving {
+                    // SAFETY: row yp of the destination belongs to this task; plan cells are
+                    // listed once.
+                    unsafe { run.row(this, c, src, writer.ptr(), y, part == Part::Edge) };
+                }
                 match part {
                     Part::Inner => *bad = b as u8,
                     Part::Edge => *bad |= b as u8,

@@ -19,6 +19,7 @@ pub mod geometry;
 pub mod kernel;
 pub mod lanes;
 pub mod lattice;
+pub mod moving;
 pub mod real;
 
 pub use backend::FluidBackend;

@@ -125,3 +125,127 @@ pub fn run_on_ranks(ranks: usize, bin: &str, scene: &Path, out: &Path, extra: &[
     eprintln!("{}", String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{ranks} ranks failed: {:?}", o.status);
 }
+
+// Helpers of the distributed (mpirun) tests.
+
+/// Run `grainflow ARGS` on `ranks` ranks: directly for 1, under mpirun otherwise.
+pub fn grainflow(ranks: usize, args: &[&str]) -> std::process::Output {
+    let o = on_ranks(ranks, env!("CARGO_BIN_EXE_grainflow"))
+        .args(args)
+        .args(["--quiet", "--threads", "1"])
+        .output()
+        .expect("grainflow or mpirun starts (scripts/setup.sh installs Open MPI)");
+    eprintln!("$ {ranks} rank(s): grainflow {}", args.join(" "));
+    eprintln!("{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+/// `grainflow run SCENE --out OUT EXTRA…` on `ranks` ranks; panics unless it succeeds.
+pub fn run_ok(ranks: usize, scene: &str, out: &Path, extra: &[&str]) {
+    let mut args = vec!["run", scene, "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = grainflow(ranks, &args);
+    assert!(
+        o.status.success(),
+        "{ranks} ranks: {scene} failed: {:?}",
+        o.status
+    );
+}
+
+/// Every dataset of every snapshot group, as raw f64 values.
+pub fn snapshots(path: &Path) -> Vec<(String, Vec<f64>)> {
+    let f = hdf5::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut out = Vec::new();
+    for g in f.member_names().unwrap() {
+        let group = f.group(&g).unwrap();
+        for d in group.member_names().unwrap() {
+            let v = group.dataset(&d).unwrap().read_raw::<f64>().unwrap();
+            out.push((format!("{g}/{d}"), v));
+        }
+    }
+    assert!(!out.is_empty(), "{} has no snapshots", path.display());
+    out
+}
+
+pub fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+pub fn assert_bit_identical(a: &Path, b: &Path) {
+    let (sa, sb) = (
+        snapshots(&a.join("fields.h5")),
+        snapshots(&b.join("fields.h5")),
+    );
+    assert_eq!(
+        sa.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        sb.iter().map(|x| &x.0).collect::<Vec<_>>()
+    );
+    for ((name, va), (_, vb)) in sa.iter().zip(&sb) {
+        let differ = va
+            .iter()
+            .zip(vb)
+            .filter(|(x, y)| x.to_bits() != y.to_bits())
+            .count();
+        assert_eq!(
+            differ, 0,
+            "{name}: {differ} values differ between {a:?} and {b:?}"
+        );
+    }
+    let (ja, jb) = (summary(a), summary(b));
+    for key in [
+        "totals_initial",
+        "totals_final",
+        "probes",
+        "results",
+        "checks",
+        "fluid_cells",
+    ] {
+        assert_eq!(ja[key], jb[key], "summary `{key}` differs");
+    }
+}
+
+/// Every grain snapshot of `dir/grains.h5` as (group/dataset, values sorted by grain id).
+pub fn grain_snapshots(dir: &Path) -> Vec<(String, Vec<f64>)> {
+    let f = hdf5::File::open(dir.join("grains.h5")).expect("grains.h5");
+    let mut out = Vec::new();
+    for g in f.member_names().unwrap() {
+        let group = f.group(&g).unwrap();
+        let ids = group.dataset("id").unwrap().read_raw::<u64>().unwrap();
+        let mut order: Vec<usize> = (0..ids.len()).collect();
+        order.sort_by_key(|&i| ids[i]);
+        for d in group.member_names().unwrap() {
+            if d == "id" || d == "contacts" {
+                continue;
+            }
+            let ds = group.dataset(&d).unwrap();
+            let v = ds.read_raw::<f64>().unwrap();
+            let w = v.len() / ids.len().max(1);
+            let sorted: Vec<f64> = order
+                .iter()
+                .flat_map(|&i| v[i * w..(i + 1) * w].to_vec())
+                .collect();
+            out.push((format!("{g}/{d}"), sorted));
+        }
+    }
+    out
+}
+
+/// The grain snapshots of two runs hold the same bits (rows matched by id).
+pub fn assert_grains_identical(a: &Path, b: &Path) {
+    let (ga, gb) = (grain_snapshots(a), grain_snapshots(b));
+    assert_eq!(
+        ga.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        gb.iter().map(|x| &x.0).collect::<Vec<_>>()
+    );
+    for ((name, va), (_, vb)) in ga.iter().zip(&gb) {
+        let differ = va
+            .iter()
+            .zip(vb)
+            .filter(|(x, y)| x.to_bits() != y.to_bits())
+            .count();
+        assert_eq!(
+            differ, 0,
+            "{name}: {differ} values differ between {a:?} and {b:?}"
+        );
+    }
+}

@@ -17,6 +17,7 @@ impl SlabDem {
         let sys = &mut self.system;
         let mut dest: HashMap<u64, usize> = HashMap::new();
         let mut grains_out = [Vec::new(), Vec::new()];
+        let mut extras_out = [Vec::new(), Vec::new()];
         let mut keep = vec![true; sys.owned];
         let g = &sys.grains;
         for i in 0..sys.owned {
@@ -24,6 +25,7 @@ impl SlabDem {
                 continue;
             };
             g.pack(i, &mut grains_out[side]);
+            sys.pack_extras(i, &mut extras_out[side]);
             dest.insert(g.id[i], side);
             keep[i] = false;
         }
@@ -46,17 +48,17 @@ impl SlabDem {
         }
         self.migrated += dest.len() as u64;
         sys.grains.retain(&keep);
+        sys.retain_extras(&keep);
         sys.owned = sys.grains.len();
-        let msgs = [
-            join(&grains_out[0], &hist_out[0]),
-            join(&grains_out[1], &hist_out[1]),
-        ];
+        let msgs = [0, 1].map(|s| join(&[&grains_out[s], &hist_out[s], &extras_out[s]]));
         let got = self.exchange_varlen(comm, &msgs);
         let sys = &mut self.system;
+        let width = sys.extras_width();
         for msg in got.iter() {
-            let (grains, hist) = split(msg);
-            for p in grains.chunks_exact(Grains::PACKED) {
+            let [grains, hist, extras] = split(msg);
+            for (k, p) in grains.chunks_exact(Grains::PACKED).enumerate() {
                 sys.grains.push_packed(p);
+                sys.push_extras(&extras[k * width..(k + 1) * width]);
             }
             for h in hist.chunks_exact(3) {
                 let key = (h[0].to_bits(), h[1].to_bits());
@@ -125,20 +127,21 @@ pub(super) fn leaves_to(
     }
 }
 
-/// `[n_a, a…, b…]`.
-pub(super) fn join(a: &[f64], b: &[f64]) -> Vec<f64> {
-    let mut v = Vec::with_capacity(1 + a.len() + b.len());
-    v.push(a.len() as f64);
-    v.extend_from_slice(a);
-    v.extend_from_slice(b);
+/// `[n_0, n_1, part 0…, part 1…, part 2…]`: three parts in one message.
+pub(super) fn join(parts: &[&[f64]; 3]) -> Vec<f64> {
+    let mut v = Vec::with_capacity(2 + parts.iter().map(|p| p.len()).sum::<usize>());
+    v.extend_from_slice(&[parts[0].len() as f64, parts[1].len() as f64]);
+    for p in parts {
+        v.extend_from_slice(p);
+    }
     v
 }
 
-/// Inverse of [`join`] (an empty message is two empty parts).
-pub(super) fn split(msg: &[f64]) -> (&[f64], &[f64]) {
+/// Inverse of [`join`] (an empty message is three empty parts).
+pub(super) fn split(msg: &[f64]) -> [&[f64]; 3] {
     if msg.is_empty() {
-        return (&[], &[]);
+        return [&[], &[], &[]];
     }
-    let n = msg[0] as usize;
-    (&msg[1..1 + n], &msg[1 + n..])
+    let (a, b) = (msg[0] as usize, msg[1] as usize);
+    [&msg[2..2 + a], &msg[2 + a..2 + a + b], &msg[2 + a + b..]]
 }

@@ -1,0 +1,196 @@
+//! Bounce-back schemes: the fluid cells next to a grain (its *boundary*), the plan of their
+//! links to it, and the loads they hand to each grain.
+
+use super::exchange::{neighbour, Coupler, Owner, Unstable};
+use super::gather::{gather, gather2, group_by_row};
+use super::map::{nearest_image, GrainView, NONE};
+use super::Scheme;
+use crate::lbm::d2q9::{CX, CY, Q, W};
+use crate::lbm::moving::MovingLink;
+use crate::lbm::{Lattice, Real};
+
+impl Coupler {
+    /// The covered and boundary cell lists from `owner` (for the grains `views` it was
+    /// built from). Covered: `touched` restricted to interior cells. Boundary: grain by grain
+    /// (id order), each image's cells in row order, the interior fluid cells no grain covers
+    /// that neighbour a cell of that grain; a cell next to several grains is listed with the
+    /// first. Both orders are the restriction of a partition-independent order.
+    pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
+        self.covered.clear();
+        self.boundary.clear();
+        if self.scheme == Scheme::Psm {
+            return;
+        }
+        let f = self.frame;
+        let interior = |k: usize| {
+            let (x, y) = f.local(k);
+            x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
+        };
+        self.covered.extend(
+            self.touched
+                .iter()
+                .copied()
+                .filter(|&k| interior(k as usize)),
+        );
+        let owner = &self.owner;
+        let fluid = |k: usize| lat.is_fluid_at(k);
+        gather(
+            views.len(),
+            &mut self.offsets,
+            &mut self.candidates,
+            |g| {
+                let mut n = 0;
+                boundary_of(&f, owner, &fluid, views, g, |_| n += 1);
+                n
+            },
+            |g, out| {
+                let mut at = 0;
+                boundary_of(&f, owner, &fluid, views, g, |k| {
+                    out[at] = k as u32;
+                    at += 1;
+                });
+            },
+        );
+        for &k in &self.candidates {
+            if !self.mark[k as usize] {
+                self.mark[k as usize] = true;
+                self.boundary.push(k);
+            }
+        }
+        for &k in &self.boundary {
+            self.mark[k as usize] = false;
+        }
+    }
+
+    /// Plan the boundary cells' links (half-way or interpolated bounce-back with the grain's
+    /// surface velocity), grouped by row for the sweep.
+    pub(super) fn plan_links<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
+        let f = self.frame;
+        let interpolated = self.scheme == Scheme::Interpolated;
+        let (owner, boundary) = (&self.owner, &self.boundary);
+        group_by_row(
+            boundary.len(),
+            f.ny,
+            |c| f.local(boundary[c] as usize).1 as usize,
+            &mut self.links.rows,
+            &mut self.order,
+        );
+        let order = &self.order;
+        // One pass per cell to count its links, one to write them (in parallel, in order).
+        gather2(
+            order.len(),
+            &mut self.links.start,
+            &mut self.links.links,
+            &mut self.link_owner,
+            |c| {
+                let k = boundary[order[c] as usize] as usize;
+                (1..Q)
+                    .filter(|&i| owner[neighbour(&f, k, i, -1)] != NONE)
+                    .count()
+            },
+            |c, out, own| {
+                let k = boundary[order[c] as usize] as usize;
+                let centre = f.centre(k);
+                let mut at = 0;
+                for i in 1..Q {
+                    let g = owner[neighbour(&f, k, i, -1)];
+                    if g == NONE {
+                        continue;
+                    }
+                    let grain = &views[g as usize];
+                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                    let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+                    let image = nearest_image(&f, grain, mid);
+                    let ub = GrainView {
+                        centre: image,
+                        ..*grain
+                    }
+                    .surface_velocity(mid);
+                    let q = if interpolated {
+                        let q =
+                            super::geometry::link_fraction(centre, [-cx, -cy], image, grain.radius);
+                        let ff = neighbour(&f, k, i, 1);
+                        // Interpolation below ½ needs a plain fluid cell upstream.
+                        if q < 0.5 && !(lat.is_fluid_at(ff) && owner[ff] == NONE) {
+                            0.5
+                        } else {
+                            q
+                        }
+                    } else {
+                        0.5
+                    };
+                    out[at] = MovingLink {
+                        dir: i as u8,
+                        q,
+                        // Ladd 1994 moving-wall term 2 w_i ρ_w (c_i·u_b)/c_s², ρ_w = 1
+                        // (seed eq. 5.45).
+                        wall: 6.0 * W[i] * (cx * ub[0] + cy * ub[1]),
+                    };
+                    own[at] = Owner {
+                        grain: g,
+                        image_x: image[0],
+                        arm: [mid[0] - image[0], mid[1] - image[1]],
+                    };
+                    at += 1;
+                }
+            },
+        );
+        self.links.cells.clear();
+        self.links
+            .cells
+            .extend(order.iter().map(|&o| boundary[o as usize]));
+    }
+
+    /// Add each link's momentum (as the sweep reported it) to its grain's column sums, in
+    /// plan order: the grain receives −(f*_ī + f_i) c_i (seed eq. 5.47) at the link's
+    /// midpoint (torque, eq. 5.48). Maps the first bad plan cell to (cell, grain, density).
+    pub(super) fn collect_links(
+        &mut self,
+        views: &[GrainView],
+        bad: Option<(usize, f64)>,
+    ) -> Option<Unstable> {
+        for (c, &k) in self.links.cells.iter().enumerate() {
+            let col = self.column(k as usize);
+            for l in self.links.start[c] as usize..self.links.start[c + 1] as usize {
+                let (link, o, m) = (
+                    &self.links.links[l],
+                    &self.link_owner[l],
+                    self.link_momentum[l],
+                );
+                let i = link.dir as usize;
+                let (px, py) = (-m * CX[i] as f64, -m * CY[i] as f64);
+                let g = o.grain as usize;
+                let load = [px, py, o.arm[0] * py - o.arm[1] * px];
+                self.sums.add(g, views[g].centre[0], o.image_x, col, load);
+            }
+        }
+        bad.map(|(c, rho)| {
+            let l = self.links.start[c] as usize;
+            (self.links.cells[c] as usize, self.link_owner[l].grain, rho)
+        })
+    }
+}
+
+/// Visit the boundary cells of grain `g` (see [`Coupler::rebuild_lists`]) in order.
+fn boundary_of(
+    f: &super::map::SlabFrame,
+    owner: &[u32],
+    fluid: &impl Fn(usize) -> bool,
+    views: &[GrainView],
+    g: usize,
+    mut visit: impl FnMut(usize),
+) {
+    let grain = &views[g];
+    for c in f.images(grain) {
+        f.for_box(c, grain.radius + 1.0, |k, x, y| {
+            let interior = x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64;
+            if interior
+                && owner[k] == NONE
+                && fluid(k)
+                && (1..Q).any(|i| owner[neighbour(f, k, i, -1)] == g as u32)
+            {
+                visit(k);
+            }
+        });
+    }
+}
