@@ -307,9 +307,15 @@ fn run_typed<T: Real + hdf5::H5Type>(
         _ => (None, None),
     };
     let mut sim = Simulation::<T>::new(scene, comm, backend, storage, restored_grains)?;
+    // The momentum balance reads every fluid cell: only when an analysis asks for it.
+    let wants_momentum = scene
+        .scene
+        .analyses
+        .iter()
+        .any(|a| matches!(a, crate::scene::Analysis::MomentumBalance));
     let momentum = |sim: &mut Simulation<T>| {
         let Simulation { grains, fluid, .. } = sim;
-        grains.as_ref().map(|c| {
+        grains.as_ref().filter(|_| wants_momentum).map(|c| {
             let (f, g) = c.momentum(fluid.as_mut(), comm);
             [f, g]
         })

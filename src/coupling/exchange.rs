@@ -85,15 +85,12 @@ pub struct Coupler {
     pub(super) boundary: Vec<u32>,
     /// Interior covered cells.
     pub(super) covered: Vec<u32>,
-    /// Solid fractions (partially saturated method), grain by grain.
+    /// Solid fractions (partially saturated method), grain by grain, and the same in plan
+    /// order (by row, then cell).
     pub(super) shares: Vec<Share>,
+    pub(super) sorted: Vec<Share>,
     /// Scratch marks per padded cell (all false between uses).
     pub(super) mark: Vec<bool>,
-    /// Per padded cell: its cell in the PSM plan, or NONE (all NONE between uses).
-    pub(super) slot: Vec<u32>,
-    /// Per PSM plan cell: its shares (indices into `shares`) and how many.
-    pub(super) members: Vec<[u32; super::psm::MAX_PER_CELL]>,
-    pub(super) member_count: Vec<u8>,
     /// The plans of the last exchange and where each link or share belongs.
     pub(super) links: LinkPlan,
     pub(super) link_owner: Vec<Owner>,
@@ -135,10 +132,8 @@ impl Coupler {
             boundary: Vec::new(),
             covered: Vec::new(),
             shares: Vec::new(),
+            sorted: Vec::new(),
             mark: vec![false; cells],
-            slot: vec![NONE; cells],
-            members: Vec::new(),
-            member_count: Vec::new(),
             links: LinkPlan::default(),
             link_owner: Vec::new(),
             psm: PsmPlan::default(),

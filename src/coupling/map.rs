@@ -180,6 +180,10 @@ pub fn nearest_image(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] 
 pub struct Share {
     /// Padded cell index.
     pub cell: u32,
+    /// Its local row.
+    pub row: u32,
+    /// Its place in the list it was made in (for stable orders after copies).
+    pub rank: u32,
     /// Grain index.
     pub grain: u32,
     /// Solid fraction ε of the cell covered by this grain (exact disk–square area).
@@ -226,6 +230,8 @@ pub fn for_shares(
             };
             visit(Share {
                 cell: k as u32,
+                row: y as u32,
+                rank: 0,
                 grain: g as u32,
                 fraction,
                 centre: c,

@@ -4,12 +4,10 @@
 
 use super::exchange::{Coupler, Owner, Unstable};
 use super::gather::{gather, gather2, group_by_row};
-use super::map::{for_shares, GrainView, NONE};
+use super::map::{for_shares, GrainView, Share};
 use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
-
-/// Most grains that can share one cell (disks at least three cells across).
-pub(super) const MAX_PER_CELL: usize = 8;
+use rayon::prelude::*;
 
 impl Coupler {
     /// The solid fraction of every interior fluid cell each grain overlaps, grain by grain
@@ -36,96 +34,120 @@ impl Coupler {
         );
     }
 
-    /// Group the shares by cell (cells in order of first appearance, then grouped by row;
-    /// each cell's shares in grain order) and plan the partially saturated collision.
+    /// Group the shares by row, then by cell within a row (cells in increasing x, each
+    /// cell's shares in grain order), and plan the partially saturated collision. The order
+    /// is the restriction of a partition-independent one (rows, then global x).
     pub(super) fn plan_psm<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let tau = lat.tau0();
-        let mut members = std::mem::take(&mut self.members);
-        let mut counts = std::mem::take(&mut self.member_count);
-        let mut cells = std::mem::take(&mut self.candidates);
-        members.clear();
-        counts.clear();
-        cells.clear();
-        for (n, sh) in self.shares.iter().enumerate() {
-            let slot = &mut self.slot[sh.cell as usize];
-            if *slot == NONE {
-                *slot = cells.len() as u32;
-                cells.push(sh.cell);
-                members.push([0; MAX_PER_CELL]);
-                counts.push(0);
-            }
-            let c = *slot as usize;
-            if (counts[c] as usize) < MAX_PER_CELL {
-                members[c][counts[c] as usize] = n as u32;
-                counts[c] += 1;
-            }
-        }
-        for &k in &cells {
-            self.slot[k as usize] = NONE;
-        }
         let plan = &mut self.psm;
-        group_by_row(
-            cells.len(),
-            f.ny,
-            |c| f.local(cells[c] as usize).1 as usize,
-            &mut plan.rows,
-            &mut self.order,
-        );
-        let (order, shares) = (&self.order, &self.shares);
+        // Shares by row (stable: grain order within a row), copied into row order so that
+        // every later pass reads them in sequence; then by cell within each row.
+        {
+            let shares = &self.shares;
+            group_by_row(
+                shares.len(),
+                f.ny,
+                |s| shares[s].row as usize,
+                &mut self.offsets,
+                &mut self.order,
+            );
+        }
+        let sorted = &mut self.sorted;
+        sorted.clear();
+        sorted.extend(self.order.iter().map(|&s| {
+            let mut sh = self.shares[s as usize];
+            // Keep the grain order among shares of one cell: tag with the share's rank.
+            sh.rank = s;
+            sh
+        }));
+        {
+            let offsets = &self.offsets;
+            let mut rows: Vec<&mut [Share]> = Vec::with_capacity(f.ny);
+            let mut rest = sorted.as_mut_slice();
+            for y in 0..f.ny {
+                let (mine, tail) = rest.split_at_mut((offsets[y + 1] - offsets[y]) as usize);
+                rows.push(mine);
+                rest = tail;
+            }
+            rows.par_iter_mut()
+                .with_min_len(16)
+                .for_each(|r| r.sort_unstable_by_key(|sh| (sh.cell, sh.rank)));
+        }
+        let shares = &*sorted;
+        // Cell groups: where each cell's shares start.
+        plan.cells.clear();
+        plan.start.clear();
+        plan.rows.clear();
+        plan.rows.push(0);
+        let mut y = 0;
+        for (j, sh) in shares.iter().enumerate() {
+            while y < sh.row as usize {
+                plan.rows.push(plan.cells.len() as u32);
+                y += 1;
+            }
+            if j == 0 || shares[j - 1].cell != sh.cell {
+                plan.cells.push(sh.cell);
+                plan.start.push(j as u32);
+            }
+        }
+        while plan.rows.len() <= f.ny {
+            plan.rows.push(plan.cells.len() as u32);
+        }
+        plan.start.push(shares.len() as u32);
+        let start = &plan.start;
         let eps_of = |c: usize| -> f64 {
-            members[c][..counts[c] as usize]
+            shares[start[c] as usize..start[c + 1] as usize]
                 .iter()
-                .map(|&s| shares[s as usize].fraction)
+                .map(|sh| sh.fraction)
                 .sum()
         };
-        plan.cells.clear();
-        plan.cells.extend(order.iter().map(|&o| cells[o as usize]));
-        plan.total.clear();
-        plan.total.extend(order.iter().map(|&o| {
-            let e = eps_of(o as usize).min(1.0);
-            // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
-            e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5))
-        }));
-        let (pcells, totals) = (&plan.cells, &plan.total);
+        (0..plan.cells.len())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|c| {
+                let e = eps_of(c).min(1.0);
+                // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
+                e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5))
+            })
+            .collect_into_vec(&mut plan.total);
+        let (cells, totals) = (&plan.cells, &plan.total);
+        let fill = |c: usize, out: &mut [SolidShare], own: &mut [Owner]| {
+            let eps = eps_of(c);
+            let centre = f.centre(cells[c] as usize);
+            let group = &shares[start[c] as usize..start[c + 1] as usize];
+            for (j, sh) in group.iter().enumerate() {
+                let grain = &views[sh.grain as usize];
+                out[j] = SolidShare {
+                    // A cell whose overlap rounds to nothing stays plain fluid.
+                    b: if eps > 0.0 {
+                        totals[c] * sh.fraction / eps
+                    } else {
+                        0.0
+                    },
+                    velocity: GrainView {
+                        centre: sh.centre,
+                        ..*grain
+                    }
+                    .surface_velocity(centre),
+                };
+                own[j] = Owner {
+                    grain: sh.grain,
+                    image_x: sh.centre[0],
+                    arm: [centre[0] - sh.centre[0], centre[1] - sh.centre[1]],
+                };
+            }
+        };
+        let mut offsets = std::mem::take(&mut self.candidates);
         gather2(
-            order.len(),
-            &mut plan.start,
+            cells.len(),
+            &mut offsets,
             &mut plan.shares,
             &mut self.share_owner,
-            |c| counts[order[c] as usize] as usize,
-            |c, out, own| {
-                let o = order[c] as usize;
-                let m = &members[o][..counts[o] as usize];
-                let eps = eps_of(o);
-                let centre = f.centre(pcells[c] as usize);
-                for (j, &s) in m.iter().enumerate() {
-                    let sh = &shares[s as usize];
-                    let grain = &views[sh.grain as usize];
-                    out[j] = SolidShare {
-                        // A cell whose overlap rounds to nothing stays plain fluid.
-                        b: if eps > 0.0 {
-                            totals[c] * sh.fraction / eps
-                        } else {
-                            0.0
-                        },
-                        velocity: GrainView {
-                            centre: sh.centre,
-                            ..*grain
-                        }
-                        .surface_velocity(centre),
-                    };
-                    own[j] = Owner {
-                        grain: sh.grain,
-                        image_x: sh.centre[0],
-                        arm: [centre[0] - sh.centre[0], centre[1] - sh.centre[1]],
-                    };
-                }
-            },
+            |c| (start[c + 1] - start[c]) as usize,
+            fill,
         );
-        self.members = members;
-        self.member_count = counts;
-        self.candidates = cells;
+        self.candidates = offsets;
     }
 
     /// Add each share's momentum (as the sweep reported it) to its grain's column sums, in

@@ -54,7 +54,11 @@ impl ColumnSums {
     #[inline]
     pub fn add(&mut self, g: usize, grain_x: f64, image_x: f64, column: usize, load: Load) {
         // The column as seen from the grain's own centre (undo the image's shift).
-        let shift = ((grain_x - image_x) / self.global_nx as f64).round() as i64 * self.global_nx;
+        let shift = if grain_x == image_x {
+            0
+        } else {
+            ((grain_x - image_x) / self.global_nx as f64).round() as i64 * self.global_nx
+        };
         let slot = column as i64 + shift - self.base[g];
         let at = self.first[g] + slot as usize;
         debug_assert!(at < self.first[g + 1], "column outside the grain's window");
