@@ -206,15 +206,6 @@ impl<T: Real> Simulation<T> {
             }
         }
         lattice.update_boundaries();
-        if scene.scene.grains.is_some() && backend == Backend::Gpu {
-            return Err(invalid(
-                "backend",
-                "coupled fluid–grain runs use the CPU backend for now: run with \
-                 `--backend cpu` (or drop `backend = \"gpu\"` from [run])"
-                    .into(),
-            )
-            .into());
-        }
         let mut fluid: Box<dyn FluidBackend<T>> = match backend {
             Backend::Cpu => Box::new(lattice),
             Backend::Gpu => Box::new(GpuFluid::new(

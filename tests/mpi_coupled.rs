@@ -128,3 +128,25 @@ fn coupled_checkpoints_are_refused_by_the_wrong_scene() {
         assert!(err.contains(needle), "expected `{needle}` in: {err}");
     }
 }
+
+/// The device backend on 2 ranks gives the bits of 1 device rank (coupled, f32).
+#[test]
+fn coupled_gpu_runs_on_2_ranks_match_1_gpu_rank() {
+    if grainflow::gpu::list_adapters().is_empty() {
+        eprintln!("SKIPPED: no GPU adapter (scripts/setup.sh installs Mesa lavapipe)");
+        return;
+    }
+    let d = tempfile::tempdir().unwrap();
+    let gpu = ["--backend", "gpu", "--precision", "f32"];
+    for scheme in ["bounce-back", "psm"] {
+        let scene = with_scheme("tests/scenes/mpi_grains_box.toml", scheme, d.path());
+        let one = d.path().join(format!("{scheme}-gpu1"));
+        run_ok(1, &scene, &one, &gpu);
+        let two = d.path().join(format!("{scheme}-gpu2"));
+        run_ok(2, &scene, &two, &gpu);
+        assert!(summary(&two)["device"].as_str().unwrap().starts_with("gpu"));
+        assert_bit_identical(&one, &two);
+        assert_grains_identical(&one, &two);
+        eprintln!("{scheme}: 2 GPU ranks match 1 GPU rank bit for bit");
+    }
+}

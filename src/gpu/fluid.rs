@@ -68,17 +68,19 @@ pub struct GpuFluid<T: Real> {
     host: Lattice<T>,
     /// Populations stored as IEEE half (arithmetic stays in `T` = f32).
     f16: bool,
-    ctx: Arc<GpuContext>,
-    split: Split,
+    pub(super) ctx: Arc<GpuContext>,
+    pub(super) split: Split,
     pops: [Vec<wgpu::Buffer>; 2],
     geo: Geo,
     prm_buf: wgpu::Buffer,
     aux_buf: wgpu::Buffer,
-    bad_buf: wgpu::Buffer,
+    pub(super) bad_buf: wgpu::Buffer,
     readback: wgpu::Buffer,
-    list_layout: wgpu::BindGroupLayout,
+    pub(super) list_layout: wgpu::BindGroupLayout,
+    /// Layout of the lattice group (0).
+    pub(super) lattice_layout: wgpu::BindGroupLayout,
     /// `groups[c]`: current buffer `c` as source, the other as destination.
-    groups: [wgpu::BindGroup; 2],
+    pub(super) groups: [wgpu::BindGroup; 2],
     inner: CellList,
     edge: CellList,
     probes: Option<(Vec<(usize, usize)>, CellList)>,
@@ -89,10 +91,12 @@ pub struct GpuFluid<T: Real> {
     rest_force: Vec<[f64; 2]>,
     /// Steps recorded but not yet submitted.
     pending: Option<wgpu::CommandEncoder>,
+    /// Kernels of moving surfaces (grains), made on first use.
+    pub(super) moving: Option<super::moving::MovingDevice>,
     pending_steps: usize,
 }
 
-fn to_bytes<T: Real>(values: &[T]) -> Vec<u8> {
+pub(super) fn to_bytes<T: Real>(values: &[T]) -> Vec<u8> {
     let mut out = vec![0u8; values.len() * T::BYTES];
     for (v, b) in values.iter().zip(out.chunks_exact_mut(T::BYTES)) {
         v.put_le(b);
@@ -100,7 +104,7 @@ fn to_bytes<T: Real>(values: &[T]) -> Vec<u8> {
     out
 }
 
-fn from_bytes<T: Real>(bytes: &[u8]) -> Vec<T> {
+pub(super) fn from_bytes<T: Real>(bytes: &[u8]) -> Vec<T> {
     bytes.chunks_exact(T::BYTES).map(T::get_le).collect()
 }
 
@@ -121,7 +125,7 @@ impl<T: Real> GpuFluid<T> {
     }
 
     /// Copy device buffer `b` to the host's buffer `b`.
-    pub(crate) fn pull(&mut self, b: usize) {
+    fn pull(&mut self, b: usize) {
         self.flush();
         let per = self.split.planes_per_part() * self.host.plane;
         for j in 0..self.split.parts {
@@ -129,25 +133,6 @@ impl<T: Real> GpuFluid<T> {
             let v = self.pops_from_bytes(&self.download(&self.pops[b][j], 0, bytes));
             self.host.buf[b][j * per..(j + 1) * per].copy_from_slice(&v);
         }
-    }
-
-    /// Copy both device buffers to the host.
-    pub(crate) fn pull_both(&mut self) {
-        self.pull(0);
-        self.pull(1);
-    }
-
-    /// Copy the host's current buffer to the device.
-    pub(crate) fn push_current(&mut self) {
-        let b = self.host.cur;
-        let per = self.split.planes_per_part() * self.host.plane;
-        for (j, buf) in self.pops[b].iter().enumerate() {
-            let values = &self.host.buf[b][j * per..(j + 1) * per];
-            self.ctx
-                .queue
-                .write_buffer(buf, 0, &self.pops_to_bytes(values));
-        }
-        self.ctx.queue.submit([]);
     }
 
     /// The host lattice (geometry; populations only after a pull).
@@ -178,7 +163,7 @@ impl<T: Real> GpuFluid<T> {
     }
 
     /// Read `bytes` bytes of `buffer` from `offset`, through the read-back buffer in chunks.
-    fn download(&self, buffer: &wgpu::Buffer, offset: usize, bytes: usize) -> Vec<u8> {
+    pub(super) fn download(&self, buffer: &wgpu::Buffer, offset: usize, bytes: usize) -> Vec<u8> {
         let mut out = Vec::with_capacity(bytes);
         let chunk = self.readback.size() as usize;
         let mut at = 0;
@@ -206,8 +191,23 @@ impl<T: Real> GpuFluid<T> {
         self.ctx.device.create_command_encoder(&Default::default())
     }
 
+    /// The cell list of the inner special cells' bind group (a group 1 for kernels that
+    /// do not read a list).
+    pub(super) fn inner_list_group(&self) -> wgpu::BindGroup {
+        self.inner.group.clone()
+    }
+
+    /// The WGSL type populations are stored in.
+    pub(super) fn stored_name(&self) -> &'static str {
+        if self.f16 {
+            "f16"
+        } else {
+            T::NAME
+        }
+    }
+
     /// Submit the queued steps.
-    fn flush(&mut self) {
+    pub(super) fn flush(&mut self) {
         if let Some(enc) = self.pending.take() {
             self.ctx.queue.submit([enc.finish()]);
         }

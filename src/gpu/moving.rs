@@ -1,50 +1,367 @@
-//! Moving surfaces (`lbm::moving`) on the device backend.
+//! Moving surfaces (`lbm::moving`) on the device backend: the plan's cells are recomputed on
+//! the device right after the sweep (`shaders/moving.wgsl`); what comes back is one momentum
+//! per link or solid share, which the host sums per grain and column in a fixed order (so the
+//! forces have the same bits on any rank count). Rest fills, refills and cell momenta move
+//! whole cells between host and device through small gather and scatter kernels, so their
+//! arithmetic is the CPU backend's, to the bit.
 
+use super::buffers::{job_groups, round16, shader_source};
 use super::fluid::GpuFluid;
-use crate::lbm::moving::{MovingCells, Refill};
+use crate::lbm::d2q9::Q;
+use crate::lbm::moving::{
+    equilibrium_at, momentum_of, refill_cell, refill_sources, MovingCells, Refill,
+};
 use crate::lbm::Real;
+use decomposition::Comm;
+use std::collections::HashMap;
+
+/// Pipelines and buffers of the moving-surface kernels (made on first use).
+pub(crate) struct MovingDevice {
+    links: wgpu::ComputePipeline,
+    psm: wgpu::ComputePipeline,
+    gather: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    /// (index buffer, real buffer, their bind group), grown on demand.
+    buffers: Option<(wgpu::Buffer, wgpu::Buffer, wgpu::BindGroup)>,
+}
+
+/// Which moving kernel to run.
+#[derive(Clone, Copy)]
+enum Kernel {
+    Links,
+    Psm,
+    Gather,
+    Scatter,
+}
+
+fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
 
 impl<T: Real> GpuFluid<T> {
-    /// Recompute the cells of `moving` after a sweep (see
-    /// [`crate::lbm::Lattice::apply_moving`]).
-    pub(crate) fn moving_cells(&mut self, moving: &mut MovingCells<'_>) -> Option<(usize, f64)> {
-        if matches!(moving, MovingCells::None) {
-            return None;
+    /// The moving-surface kernels, compiled on first use.
+    fn moving_device(&mut self) -> &mut MovingDevice {
+        if self.moving.is_none() {
+            let dev = &self.ctx.device;
+            let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("moving surfaces"),
+                entries: &[storage(0, true), storage(1, false)],
+            });
+            let source = shader_source(T::NAME, self.stored_name(), self.split)
+                + include_str!("shaders/moving.wgsl");
+            let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("grainflow moving surfaces"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+            let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("moving surfaces"),
+                bind_group_layouts: &[
+                    Some(&self.lattice_layout),
+                    Some(&self.list_layout),
+                    Some(&layout),
+                ],
+                immediate_size: 0,
+            });
+            let constants = self.pipeline_constants();
+            let make = |entry: &str| {
+                dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(&pl),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        zero_initialize_workgroup_memory: false,
+                    },
+                    cache: None,
+                })
+            };
+            self.moving = Some(MovingDevice {
+                links: make("moving_links"),
+                psm: make("moving_psm"),
+                gather: make("gather_cells"),
+                scatter: make("scatter_cells"),
+                layout,
+                buffers: None,
+            });
         }
-        self.pull_both();
-        let bad = self.host_mut().apply_moving(moving);
-        self.push_current();
-        bad
+        self.moving.as_mut().expect("made above")
     }
 
-    /// Whole neighbour cells in the halos (see
-    /// [`crate::lbm::FluidBackend::refresh_halos_full`]).
-    pub(crate) fn halos_full(&mut self, comm: &dyn decomposition::Comm) {
+    /// Run `kernel` over `threads` items with the index data `idx` and real data `real`
+    /// (uploaded first), the lattice bound as group `g`; submitted at once. Returns the
+    /// real buffer for read-backs.
+    fn run_moving(&mut self, kernel: Kernel, g: usize, threads: usize, idx: &[u32], real: &[T]) {
+        self.flush();
+        let ctx = self.ctx.clone();
+        let (idx_bytes, real_bytes) = (round16(idx.len() * 4), round16(real.len() * T::BYTES));
+        self.moving_device();
+        let (lattice_group, list_group) = (self.groups[g].clone(), self.inner_list_group());
+        let dev = self.moving.as_mut().expect("made above");
+        let grow = dev
+            .buffers
+            .as_ref()
+            .is_none_or(|(i, r, _)| i.size() < idx_bytes || r.size() < real_bytes);
+        if grow {
+            let make = |label: &str, bytes: u64| {
+                ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    // Room to grow without a new buffer every step.
+                    size: bytes + bytes / 4,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                })
+            };
+            let (i, r) = (
+                make("moving index", idx_bytes),
+                make("moving real", real_bytes),
+            );
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("moving surfaces"),
+                layout: &dev.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: i.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: r.as_entire_binding(),
+                    },
+                ],
+            });
+            dev.buffers = Some((i, r, group));
+        }
+        let (ibuf, rbuf, group) = dev.buffers.as_ref().expect("made above");
+        ctx.queue.write_buffer(ibuf, 0, bytemuck::cast_slice(idx));
+        if !real.is_empty() {
+            ctx.queue
+                .write_buffer(rbuf, 0, &super::fluid::to_bytes(real));
+        }
+        let pipe = match kernel {
+            Kernel::Links => &dev.links,
+            Kernel::Psm => &dev.psm,
+            Kernel::Gather => &dev.gather,
+            Kernel::Scatter => &dev.scatter,
+        };
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        if threads > 0 {
+            let (gx, gy) = job_groups(threads);
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipe);
+            pass.set_bind_group(0, &lattice_group, &[]);
+            pass.set_bind_group(1, &list_group, &[]);
+            pass.set_bind_group(2, group, &[]);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        ctx.queue.submit([enc.finish()]);
+    }
+
+    /// `count` reals of the moving real buffer from `first`.
+    fn moving_reals(&self, first: usize, count: usize) -> Vec<T> {
+        let (_, rbuf, _) = self
+            .moving
+            .as_ref()
+            .and_then(|m| m.buffers.as_ref())
+            .expect("a moving kernel ran");
+        let bytes = self.download(rbuf, first * T::BYTES, count * T::BYTES);
+        super::fluid::from_bytes(&bytes)
+    }
+
+    /// The first bad plan cell of the last moving kernel, and reset the flag.
+    fn take_bad_cell(&mut self) -> Option<usize> {
+        let v = self.download(&self.bad_buf, 12, 4);
+        let c = u32::from_le_bytes(v[0..4].try_into().expect("4 bytes"));
+        self.ctx
+            .queue
+            .write_buffer(&self.bad_buf, 12, bytemuck::bytes_of(&u32::MAX));
+        (c != u32::MAX).then_some(c as usize)
+    }
+
+    /// Recompute the cells of `moving` right after the sweep (the lattice group whose source
+    /// is the buffer the sweep read). Returns the plan index and density of the first cell
+    /// that went bad.
+    pub(crate) fn moving_cells(&mut self, moving: &mut MovingCells<'_>) -> Option<(usize, f64)> {
+        let prev = self.host_mut().cur ^ 1;
+        self.ctx
+            .queue
+            .write_buffer(&self.bad_buf, 12, bytemuck::bytes_of(&u32::MAX));
+        let cells = match moving {
+            MovingCells::None => return None,
+            MovingCells::Links(plan, mom) => {
+                let (n, l) = (plan.cells.len(), plan.links.len());
+                let mut idx = Vec::with_capacity(3 + 2 * n + l);
+                idx.extend_from_slice(&[n as u32, l as u32]);
+                idx.extend_from_slice(&plan.cells);
+                idx.extend_from_slice(&plan.start);
+                idx.extend(plan.links.iter().map(|k| k.dir as u32));
+                let mut real = Vec::with_capacity(3 * l);
+                real.extend(plan.links.iter().map(|k| T::from_f64(k.q)));
+                real.extend(plan.links.iter().map(|k| T::from_f64(k.wall)));
+                real.extend(std::iter::repeat_n(T::default(), l));
+                self.run_moving(Kernel::Links, prev, n, &idx, &real);
+                mom.clear();
+                if l > 0 {
+                    mom.extend(self.moving_reals(2 * l, l).iter().map(|v| v.to_f64()));
+                }
+                plan.cells.clone()
+            }
+            MovingCells::Partial(plan, mom) => {
+                let (n, s) = (plan.cells.len(), plan.shares.len());
+                let mut idx = Vec::with_capacity(3 + 2 * n);
+                idx.extend_from_slice(&[n as u32, s as u32]);
+                idx.extend_from_slice(&plan.cells);
+                idx.extend_from_slice(&plan.start);
+                let mut real = Vec::with_capacity(n + 5 * s);
+                real.extend(plan.total.iter().map(|&b| T::from_f64(b)));
+                real.extend(plan.shares.iter().map(|v| T::from_f64(v.b)));
+                real.extend(plan.shares.iter().map(|v| T::from_f64(v.velocity[0])));
+                real.extend(plan.shares.iter().map(|v| T::from_f64(v.velocity[1])));
+                real.extend(std::iter::repeat_n(T::default(), 2 * s));
+                self.run_moving(Kernel::Psm, prev, n, &idx, &real);
+                mom.clear();
+                if s > 0 {
+                    let v = self.moving_reals(n + 3 * s, 2 * s);
+                    mom.extend(v.chunks_exact(2).map(|p| [p[0].to_f64(), p[1].to_f64()]));
+                }
+                plan.cells.clone()
+            }
+        };
+        let c = self.take_bad_cell()?;
+        let h = self.gather(&[cells[c]]);
+        Some((c, 1.0 + h.iter().map(|v| v.to_f64()).sum::<f64>()))
+    }
+
+    /// The 9 populations of each of `cells` (padded) in the current state.
+    pub(crate) fn gather(&mut self, cells: &[u32]) -> Vec<T> {
+        if cells.is_empty() {
+            return Vec::new();
+        }
         let cur = self.host_mut().cur;
-        self.pull(cur);
-        let host = self.host_mut();
-        host.update_boundaries();
-        host.refresh_exchange_full(comm);
-        self.push_current();
+        let mut idx = vec![cells.len() as u32, 0];
+        idx.extend_from_slice(cells);
+        let zeros = vec![T::default(); Q * cells.len()];
+        self.run_moving(Kernel::Gather, cur, cells.len(), &idx, &zeros);
+        self.moving_reals(0, Q * cells.len())
     }
 
-    /// Rest fill (see [`crate::lbm::Lattice::set_rest`]).
+    /// Write the 9 populations of each of `cells` (padded) into the current state.
+    pub(crate) fn scatter(&mut self, cells: &[u32], values: &[T]) {
+        if cells.is_empty() {
+            return;
+        }
+        let dst_is_cur = self.host_mut().cur ^ 1;
+        let mut idx = vec![cells.len() as u32, 0];
+        idx.extend_from_slice(cells);
+        self.run_moving(Kernel::Scatter, dst_is_cur, cells.len(), &idx, values);
+    }
+
+    /// Rest fill (see [`crate::lbm::Lattice::set_rest`]): the same values, made on the host.
     pub(crate) fn rest(&mut self, cells: &[u32], velocity: &[[f64; 2]]) {
-        self.pull_both();
-        self.host_mut().set_rest(cells, velocity);
-        self.push_current();
+        let values: Vec<T> = velocity
+            .iter()
+            .flat_map(|&u| equilibrium_at(0.0, u).map(T::from_f64))
+            .collect();
+        self.scatter(cells, &values);
     }
 
     /// Cell momenta (see [`crate::lbm::Lattice::momentum_of_cells`]).
     pub(crate) fn cell_momenta(&mut self, cells: &[u32], out: &mut Vec<[f64; 2]>) {
-        self.pull_both();
-        self.host_mut().momentum_of_cells(cells, out);
+        let v = self.gather(cells);
+        out.clear();
+        out.extend(v.chunks_exact(Q).map(|c| {
+            let h: [f64; Q] = std::array::from_fn(|i| c[i].to_f64());
+            momentum_of(&h)
+        }));
     }
 
-    /// Refills (see [`crate::lbm::Lattice::apply_refills`]).
+    /// Refills (see [`crate::lbm::Lattice::apply_refills`]): the neighbours come from the
+    /// device, the values are made on the host with the CPU's arithmetic.
     pub(crate) fn refills(&mut self, refills: &[Refill], momentum: &mut Vec<[f64; 2]>) {
-        self.pull_both();
-        self.host_mut().apply_refills(refills, momentum);
-        self.push_current();
+        momentum.clear();
+        if refills.is_empty() {
+            return;
+        }
+        let stride = self.host_mut().stride;
+        let mut sources: Vec<u32> = refills
+            .iter()
+            .flat_map(|r| refill_sources(r, stride))
+            .map(|k| k as u32)
+            .collect();
+        sources.sort_unstable();
+        sources.dedup();
+        let v = self.gather(&sources);
+        let at: HashMap<usize, usize> = sources
+            .iter()
+            .enumerate()
+            .map(|(j, &k)| (k as usize, j))
+            .collect();
+        let mut values = Vec::with_capacity(Q * refills.len());
+        for r in refills {
+            let h = refill_cell(r, stride, |m| {
+                let j = at[&m];
+                std::array::from_fn(|i| v[Q * j + i].to_f64())
+            });
+            let stored = h.map(T::from_f64);
+            values.extend_from_slice(&stored);
+            momentum.push(momentum_of(&stored.map(|x| x.to_f64())));
+        }
+        let cells: Vec<u32> = refills.iter().map(|r| r.cell).collect();
+        self.scatter(&cells, &values);
+    }
+
+    /// Whole neighbour cells in the halos (see
+    /// [`crate::lbm::FluidBackend::refresh_halos_full`]): the device's halo fills, then the
+    /// edge columns travel through the host's halo exchange.
+    pub(crate) fn halos_full(&mut self, comm: &dyn Comm) {
+        crate::lbm::FluidBackend::update_boundaries(self);
+        self.flush();
+        let host = self.host_mut();
+        let sides = host.exchanged_faces();
+        if sides == [false, false] {
+            return;
+        }
+        let (nx, ny, stride, plane, cur) = (host.nx, host.ny, host.stride, host.plane, host.cur);
+        // Padded columns of the exchanged sides: (edge, halo).
+        let columns: Vec<(usize, usize)> = [(1, 0), (nx, nx + 1)]
+            .into_iter()
+            .zip(sides)
+            .filter_map(|(c, on)| on.then_some(c))
+            .collect();
+        let cells = |pick: fn(&(usize, usize)) -> usize| -> Vec<u32> {
+            columns
+                .iter()
+                .flat_map(|c| (0..ny + 2).map(move |yp| (yp * stride + pick(c)) as u32))
+                .collect()
+        };
+        let edges = cells(|c| c.0);
+        let v = self.gather(&edges);
+        let host = self.host_mut();
+        for (j, &k) in edges.iter().enumerate() {
+            for i in 0..Q {
+                host.buf[cur][i * plane + k as usize] = v[Q * j + i];
+            }
+        }
+        host.refresh_exchange_full(comm);
+        let halos = cells(|c| c.1);
+        let host = self.host_mut();
+        let values: Vec<T> = halos
+            .iter()
+            .flat_map(|&k| (0..Q).map(move |i| (i, k)))
+            .map(|(i, k)| host.buf[cur][i * plane + k as usize])
+            .collect();
+        self.scatter(&halos, &values);
     }
 }

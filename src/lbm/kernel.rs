@@ -133,6 +133,11 @@ impl<T: Real> Lattice<T> {
         }
     }
 
+    /// Whether the west and the east face are shared with another rank.
+    pub fn exchanged_faces(&self) -> [bool; 2] {
+        [Side::Left, Side::Right].map(|s| self.halo.peer(s).is_some())
+    }
+
     /// Fill the exchanged x halos of the current buffer with all nine populations of the
     /// neighbours' edge columns, for rules that read whole neighbour cells (refilling a
     /// cell a moving surface uncovered). Collective when the slab has neighbours.

@@ -416,46 +416,61 @@ impl<T: Real> Lattice<T> {
         }));
     }
 
-    /// Rebuild each cell of `refills` as the equilibrium at its surface velocity and the
-    /// mean density of its listed fluid neighbours, plus (where `extrapolate` names one) that
-    /// neighbour's non-equilibrium part (Caiazzo 2005). `momentum[r]` receives Σ h_i c_i of
-    /// the new cell. Precondition: no refilled cell is a listed neighbour of another.
+    /// Rebuild each cell of `refills` as [`refill_cell`] says. `momentum[r]` receives
+    /// Σ h_i c_i of the new cell. Precondition: no refilled cell is a listed neighbour of
+    /// another.
     pub fn apply_refills(&mut self, refills: &[Refill], momentum: &mut Vec<[f64; 2]>) {
-        let plane = self.plane;
-        let stride = self.stride as isize;
+        let (plane, stride) = (self.plane, self.stride);
         momentum.clear();
         let buf = &mut self.buf[self.cur];
         for r in refills {
-            let k = r.cell as isize;
-            let nbr = |i: usize| (k + CX[i] as isize + CY[i] as isize * stride) as usize;
-            let cell = |buf: &[T], m: usize| -> [f64; Q] {
+            let h = refill_cell(r, stride, |m| {
                 std::array::from_fn(|j| buf[j * plane + m].to_f64())
-            };
-            let (mut sum, mut n) = (0.0, 0);
-            for i in 1..Q {
-                if r.neighbours & (1 << i) != 0 {
-                    sum += 1.0 + cell(buf, nbr(i)).iter().sum::<f64>();
-                    n += 1;
-                }
-            }
-            let rho = if n > 0 { sum / n as f64 } else { 1.0 };
-            let mut h = equilibrium_at(rho - 1.0, r.velocity);
-            if r.extrapolate != 0 {
-                // Caiazzo 2005: f = f^eq(ρ̄, u_s) + f^neq of the neighbour along the normal.
-                let hm = cell(buf, nbr(r.extrapolate as usize));
-                let drho: f64 = hm.iter().sum();
-                let j = momentum_of(&hm);
-                let eq_m = equilibrium_at(drho, [j[0] / (1.0 + drho), j[1] / (1.0 + drho)]);
-                for i in 0..Q {
-                    h[i] += hm[i] - eq_m[i];
-                }
-            }
+            });
+            let mut stored = [0.0; Q];
             for i in 0..Q {
                 let v = T::from_f64(h[i]);
                 buf[i * plane + r.cell as usize] = v;
-                h[i] = v.to_f64();
+                stored[i] = v.to_f64();
             }
-            momentum.push(momentum_of(&h));
+            momentum.push(momentum_of(&stored));
         }
     }
+}
+
+/// The padded cells a refill reads: its listed neighbours and the extrapolation source.
+pub fn refill_sources(r: &Refill, stride: usize) -> impl Iterator<Item = usize> {
+    let (k, mask, ex) = (r.cell as isize, r.neighbours, r.extrapolate as usize);
+    (1..Q)
+        .filter(move |&i| mask & (1 << i) != 0 || ex == i)
+        .map(move |i| (k + CX[i] as isize + CY[i] as isize * stride as isize) as usize)
+}
+
+/// The populations of a cell a moving surface uncovered (f64, before rounding to the
+/// lattice's precision): the equilibrium at its surface velocity and the mean density of
+/// its listed fluid neighbours, plus (where `extrapolate` names one) that neighbour's
+/// non-equilibrium part (Caiazzo 2005). `cell(m)` gives padded cell m's populations.
+pub fn refill_cell(r: &Refill, stride: usize, cell: impl Fn(usize) -> [f64; Q]) -> [f64; Q] {
+    let k = r.cell as isize;
+    let nbr = |i: usize| (k + CX[i] as isize + CY[i] as isize * stride as isize) as usize;
+    let (mut sum, mut n) = (0.0, 0);
+    for i in 1..Q {
+        if r.neighbours & (1 << i) != 0 {
+            sum += 1.0 + cell(nbr(i)).iter().sum::<f64>();
+            n += 1;
+        }
+    }
+    let rho = if n > 0 { sum / n as f64 } else { 1.0 };
+    let mut h = equilibrium_at(rho - 1.0, r.velocity);
+    if r.extrapolate != 0 {
+        // Caiazzo 2005: f = f^eq(ρ̄, u_s) + f^neq of the neighbour along the normal.
+        let hm = cell(nbr(r.extrapolate as usize));
+        let drho: f64 = hm.iter().sum();
+        let j = momentum_of(&hm);
+        let eq_m = equilibrium_at(drho, [j[0] / (1.0 + drho), j[1] / (1.0 + drho)]);
+        for i in 0..Q {
+            h[i] += hm[i] - eq_m[i];
+        }
+    }
+    h
 }

@@ -277,6 +277,7 @@ impl<T: Real> GpuFluid<T> {
             bad_buf,
             readback,
             list_layout,
+            lattice_layout,
             groups,
             inner,
             edge,
@@ -286,6 +287,7 @@ impl<T: Real> GpuFluid<T> {
             rest_force,
             pending: None,
             pending_steps: 0,
+            moving: None,
         };
         gpu.upload();
         Ok(gpu)
@@ -329,6 +331,26 @@ impl<T: Real> GpuFluid<T> {
         v
     }
 
+    /// The pipeline-overridable constants that select the collision (common.wgsl).
+    pub(super) fn constants_of(host: &Lattice<T>) -> [(&'static str, f64); 3] {
+        let family = match host.collision {
+            Collision::Bgk => 0.0,
+            Collision::Trt { .. } => 1.0,
+            Collision::Mrt { .. } => 2.0,
+        };
+        let forced = host.params.force[0] != T::default() || host.params.force[1] != T::default();
+        [
+            ("FAMILY", family),
+            ("SMAG", host.smagorinsky as u8 as f64),
+            ("FORCED", forced as u8 as f64),
+        ]
+    }
+
+    /// [`GpuFluid::constants_of`] this lattice.
+    pub(in crate::gpu) fn pipeline_constants(&self) -> [(&'static str, f64); 3] {
+        Self::constants_of(&self.host)
+    }
+
     fn pipelines(
         ctx: &GpuContext,
         split: Split,
@@ -349,17 +371,7 @@ impl<T: Real> GpuFluid<T> {
             bind_group_layouts: &[Some(lattice), Some(list)],
             immediate_size: 0,
         });
-        let family = match host.collision {
-            Collision::Bgk => 0.0,
-            Collision::Trt { .. } => 1.0,
-            Collision::Mrt { .. } => 2.0,
-        };
-        let forced = host.params.force[0] != T::default() || host.params.force[1] != T::default();
-        let constants = [
-            ("FAMILY", family),
-            ("SMAG", host.smagorinsky as u8 as f64),
-            ("FORCED", forced as u8 as f64),
-        ];
+        let constants = Self::constants_of(host);
         let make = |entry: &str| {
             dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
