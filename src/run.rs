@@ -4,22 +4,24 @@ use crate::analysis::checks::{evaluate, CheckOutcome};
 use crate::analysis::{self, Results};
 use crate::io::atomic::{ensure_writable_dir, write_atomic};
 use crate::io::checkpoint;
-use crate::io::hdf5_out::{FieldData, Layout, SnapshotWriter};
-use crate::io::picture::{robust_limit, write_field_png, Scale};
+use crate::io::hdf5_out::Layout;
 use crate::io::OutputError;
-use crate::lbm::fields::{Fields, Totals};
+use crate::lbm::fields::Totals;
 use crate::lbm::Real;
 use crate::progress::Progress;
-use crate::scene::{FieldName, SceneError, Units, ValidScene};
+use crate::scene::{SceneError, Units, ValidScene};
 use crate::simulation::{stage, Simulation, STAGES};
 use decomposition::{Comm, SingleProcess};
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 use thiserror::Error;
+
+mod output;
+use output::Output;
 
 pub use crate::scene::{Backend, GpuStorage, Precision};
 
@@ -298,14 +300,15 @@ fn run_typed<T: Real + hdf5::H5Type>(
     }
     // A coupled restart reads the grains before the simulation is built (they are not
     // prepared again); the fluid follows below as for any run.
-    let (restored_grains, momentum_restored) = match (&opts.restart, &scene.scene.grains) {
-        (Some(path), Some(_)) => {
-            let walls = crate::coupling::driver::wall_count(scene)?;
-            let (r, m) = crate::io::coupled_checkpoint::read(path, comm, walls)?;
-            (Some(r), m)
-        }
-        _ => (None, None),
-    };
+    let (restored_grains, momentum_restored, initial_restored) =
+        match (&opts.restart, &scene.scene.grains) {
+            (Some(path), Some(_)) => {
+                let walls = crate::coupling::driver::wall_count(scene)?;
+                let r = crate::io::coupled_checkpoint::read(path, comm, walls)?;
+                (Some(r.grains), r.momentum_initial, Some(r.initial))
+            }
+            _ => (None, None, None),
+        };
     let mut sim = Simulation::<T>::new(scene, comm, backend, storage, restored_grains)?;
     // The momentum balance reads every fluid cell: only when an analysis asks for it.
     let wants_momentum = scene
@@ -323,6 +326,12 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let momentum_initial = match momentum_restored {
         Some(m) => Some(m),
         None => momentum(&mut sim),
+    };
+    // Where the grains were at step 0, for analyses (and checkpoints, which carry it on).
+    let grains_initial: Vec<[f64; 3]> = match (initial_restored, &sim.grains) {
+        (Some(g), _) => g,
+        (None, Some(c)) => c.positions(comm),
+        (None, None) => Vec::new(),
     };
     let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
     let checkpoint_path = opts.out_dir.join("checkpoint.h5");
@@ -406,6 +415,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
                     dem: &c.dem,
                     per_grain: c.per_grain_state(),
                     momentum_initial,
+                    initial: &grains_initial,
                 };
                 crate::io::coupled_checkpoint::write(&checkpoint_path, comm, &lat, &state, &grains)
             }
@@ -485,6 +495,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         Some(c) => c.radii(comm),
         None => Vec::new(),
     };
+    let grains_final = sim.grains.as_ref().map(|c| c.positions(comm));
     let results = if error.is_none() && !interrupted && !scene.scene.analyses.is_empty() {
         let global = sim.gather_fields(comm, &fields);
         analysis::run_all(&analysis::Inputs {
@@ -495,6 +506,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
             totals: (totals_initial, totals_final),
             momentum: momentum_initial.zip(momentum_final),
             grain_radius: grain_radius.clone(),
+            grains: grains_final.map(|f| (grains_initial.clone(), f)),
         })?
     } else if error.is_none() && !interrupted {
         let mut r = Results::new();
@@ -606,145 +618,4 @@ fn run_typed<T: Real + hdf5::H5Type>(
     }
     comm.barrier();
     Ok(summary)
-}
-
-/// Snapshot output of one run: HDF5 series (every rank its block), pictures (rank 0).
-struct Output {
-    dir: PathBuf,
-    h5: SnapshotWriter,
-    fields: Vec<FieldName>,
-    pictures: bool,
-    root: bool,
-    /// Bytes of field data in the file (global), and seconds this rank spent writing them.
-    bytes: u64,
-    write_s: f64,
-    /// `grains.h5` + `grains.xdmf` of a coupled run.
-    grains: Option<crate::io::grains_out::GrainWriter>,
-}
-
-impl Output {
-    fn new(
-        dir: &Path,
-        scene: &ValidScene,
-        layout: Layout,
-        comm: &dyn Comm,
-        resume_after: Option<u64>,
-    ) -> Result<Self, OutputError> {
-        if scene.scene.run.pictures && comm.is_root() {
-            let pics = dir.join("pictures");
-            std::fs::create_dir_all(&pics)
-                .map_err(|source| OutputError::Io { path: pics, source })?;
-        }
-        Ok(Self {
-            dir: dir.to_owned(),
-            h5: SnapshotWriter::open(dir, comm, layout, scene.scene.run.compression, resume_after)?,
-            fields: scene.scene.run.fields.clone(),
-            pictures: scene.scene.run.pictures,
-            root: comm.is_root(),
-            bytes: 0,
-            write_s: 0.0,
-            grains: match scene.scene.grains {
-                Some(_) => Some(crate::io::grains_out::GrainWriter::open(
-                    dir,
-                    comm,
-                    resume_after,
-                    true,
-                )?),
-                None => None,
-            },
-        })
-    }
-
-    /// Write this slab's fields `f` (lattice units) of `step` to HDF5 and, if enabled, the
-    /// whole lattice as pictures (gathered on rank 0). Collective.
-    fn snapshot<T: Real>(
-        &mut self,
-        step: u64,
-        u: &Units,
-        sim: &mut Simulation<T>,
-        comm: &dyn Comm,
-        f: &Fields,
-    ) -> Result<(), OutputError> {
-        let density: Vec<f64> = f.rho.iter().map(|r| r * u.density_kg_m3).collect();
-        let velocity: Vec<f64> =
-            f.ux.iter()
-                .zip(&f.uy)
-                .flat_map(|(a, b)| [u.velocity_to_si(*a), u.velocity_to_si(*b)])
-                .collect();
-        let need_vorticity = self.pictures || self.fields.contains(&FieldName::Vorticity);
-        let vorticity: Vec<f64> = if need_vorticity {
-            sim.vorticity(comm, f).iter().map(|w| w / u.dt_s).collect()
-        } else {
-            Vec::new()
-        };
-        let mut data = Vec::new();
-        for name in &self.fields {
-            let (units, components, values) = match name {
-                FieldName::Density => ("kg/m^3", 1, &density),
-                FieldName::Velocity => ("m/s", 2, &velocity),
-                FieldName::Vorticity => ("1/s", 1, &vorticity),
-            };
-            data.push(FieldData {
-                name: name.as_str(),
-                units,
-                components,
-                values,
-            });
-        }
-        let t = Instant::now();
-        self.h5.write(step, u.time_si(step), &data)?;
-        if let (Some(w), Some(c)) = (&mut self.grains, &sim.grains) {
-            let hydro: Vec<[f64; 3]> = (0..c.system().owned()).map(|i| c.hydrodynamic(i)).collect();
-            w.write_at(c.system(), comm, step, &hydro)?;
-        }
-        self.write_s += t.elapsed().as_secs_f64();
-        let cells = (sim.partition.columns() * f.ny) as u64;
-        self.bytes += data
-            .iter()
-            .map(|d| cells * d.components as u64 * 8)
-            .sum::<u64>();
-        if self.pictures {
-            // Pictures are one image of the whole lattice: gathered on every rank, drawn by rank 0.
-            let speed_local: Vec<f64> = velocity.chunks(2).map(|v| v[0].hypot(v[1])).collect();
-            let mut slab = f.clone();
-            slab.ux = speed_local;
-            slab.uy = vorticity;
-            if let Some(c) = &sim.grains {
-                // Grains drawn as solid where they cover at least half a cell.
-                let lat = sim.fluid.lattice();
-                let mut frac = vec![0.0; lat.plane()];
-                c.coupler().solid_fraction(&mut frac);
-                let (nx, ny) = (lat.nx(), lat.ny());
-                for k in 0..ny * nx {
-                    let (x, y) = ((k % nx) as isize, (k / nx) as isize);
-                    slab.fluid[k] &= frac[lat.padded_index(x, y)] < 0.5;
-                }
-            }
-            let g = sim.gather_fields(comm, &slab);
-            if self.root {
-                let solid: Vec<bool> = g.fluid.iter().map(|b| !b).collect();
-                let (speed, vort) = (&g.ux, &g.uy);
-                let pics = self.dir.join("pictures");
-                let vmax = speed.iter().copied().fold(0.0, f64::max);
-                write_field_png(
-                    &pics.join(format!("speed_{step:08}.png")),
-                    g.nx,
-                    g.ny,
-                    speed,
-                    &solid,
-                    Scale::Magnitude(vmax),
-                )?;
-                let wlim = robust_limit(vort, &solid);
-                write_field_png(
-                    &pics.join(format!("vorticity_{step:08}.png")),
-                    g.nx,
-                    g.ny,
-                    vort,
-                    &solid,
-                    Scale::Signed(wlim),
-                )?;
-            }
-        }
-        Ok(())
-    }
 }

@@ -71,6 +71,8 @@ enum ProbeTarget {
     Solid(u16),
     /// A grain of a coupled run, by id.
     Grain(u64),
+    /// The deposit of a coupled run's grains against a wall (x) on a floor (y), m.
+    Deposit(f64, f64),
 }
 
 /// Why a step could not be taken.
@@ -144,6 +146,14 @@ impl<T: Real> Simulation<T> {
                     let id = solid_id_of(&built.setup, obstacle).expect("validated");
                     targets.push(ProbeTarget::Solid(id));
                     series.push(Series::new(name, vec!["fx_n_per_m", "fy_n_per_m"]));
+                }
+                Probe::Deposit {
+                    name,
+                    wall_x_m,
+                    floor_y_m,
+                } => {
+                    targets.push(ProbeTarget::Deposit(*wall_x_m, *floor_y_m));
+                    series.push(Series::new(name, vec!["front_m", "height_m"]));
                 }
                 Probe::Grain { name, id } => {
                     targets.push(ProbeTarget::Grain(*id));
@@ -418,6 +428,22 @@ impl<T: Real> Simulation<T> {
                         .expect("validated: grain probes need grains");
                     let row = c.probe(id, comm).expect("validated id");
                     s.push(step, t, &row);
+                }
+                ProbeTarget::Deposit(wall, floor) => {
+                    let c = self
+                        .grains
+                        .as_ref()
+                        .expect("validated: deposit probes need grains");
+                    let g = c.positions(comm);
+                    let col = |k: usize| g.iter().map(|p| p[k]).collect::<Vec<f64>>();
+                    let shape = crate::analysis::collapse::pile_shape(
+                        &col(0),
+                        &col(1),
+                        &col(2),
+                        wall,
+                        floor,
+                    );
+                    s.push(step, t, &[shape.length_m, shape.height_m]);
                 }
                 ProbeTarget::Solid(id) => {
                     let f = forces[id as usize - 1];

@@ -129,6 +129,77 @@ pub fn collapse_results(
     ]
 }
 
+/// The column collapse of a coupled run (see `Analysis::ColumnCollapse`): the geometry of
+/// the column at the start and of the deposit at the end, the time the front took to reach
+/// 95 % of its run-out (from the deposit probe's series), the packing fraction of the column
+/// and the extremes of the pore-pressure probe.
+pub fn submerged(
+    inp: &super::Inputs,
+    (wall_x, floor_y): (f64, f64),
+    deposit: &str,
+    pore_pressure: Option<&str>,
+    r: &mut super::Results,
+) -> Result<(), super::AnalysisError> {
+    let Some((start, end)) = &inp.grains else {
+        return Err(super::err("column-collapse", "the run has no grains"));
+    };
+    let shape = |g: &[[f64; 3]]| {
+        let (x, y, rr): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+            g.iter().map(|p| p[0]).collect(),
+            g.iter().map(|p| p[1]).collect(),
+            g.iter().map(|p| p[2]).collect(),
+        );
+        pile_shape(&x, &y, &rr, wall_x, floor_y)
+    };
+    let (before, after) = (shape(start), shape(end));
+    let spec = inp.scene.scene.grains.as_ref().expect("validated: grains");
+    let g = spec.gravity_m_s2[0].hypot(spec.gravity_m_s2[1]);
+    let series = inp
+        .series
+        .iter()
+        .find(|s| s.name == deposit)
+        .ok_or_else(|| super::err("column-collapse", format!("no deposit probe `{deposit}`")))?;
+    // The front's series: the first time it comes within 5 % of its final run-out.
+    let (li, lf) = (before.length_m, after.length_m);
+    let target = li + 0.95 * (lf - li);
+    let t95 = (0..series.len())
+        .find(|&j| series.values[j * series.columns.len()] >= target)
+        .map_or(f64::NAN, |j| series.times[j]);
+    let values = collapse_results(before, after, g, t95);
+    for (k, v) in QUANTITIES.iter().zip(values) {
+        r.insert(format!("collapse.{k}"), v);
+    }
+    // The column: grains within it at the start (all of them, for a column behind a gate).
+    let area: f64 = start
+        .iter()
+        .map(|p| std::f64::consts::PI * p[2] * p[2])
+        .sum();
+    r.insert(
+        "collapse.packing_fraction".into(),
+        area / (before.length_m * before.height_m),
+    );
+    let (mut lo, mut hi) = (f64::NAN, f64::NAN);
+    if let Some(name) = pore_pressure {
+        let s =
+            inp.series.iter().find(|s| s.name == name).ok_or_else(|| {
+                super::err("column-collapse", format!("no pressure probe `{name}`"))
+            })?;
+        let col = s
+            .columns
+            .iter()
+            .position(|c| *c == "pressure_pa")
+            .unwrap_or(2);
+        for j in 0..s.len() {
+            let p = s.values[j * s.columns.len() + col];
+            lo = if lo.is_nan() { p } else { lo.min(p) };
+            hi = if hi.is_nan() { p } else { hi.max(p) };
+        }
+    }
+    r.insert("collapse.pore_pressure_min_pa".into(), lo);
+    r.insert("collapse.pore_pressure_max_pa".into(), hi);
+    Ok(())
+}
+
 /// Names of the thick-front results (prefixed `collapse.`), in the order of
 /// [`thick_front_results`].
 pub const THICK_QUANTITIES: [&str; 3] = ["thick_front_m", "thick_runout", "thick_experiment_ratio"];

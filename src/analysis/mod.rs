@@ -18,6 +18,9 @@ use thiserror::Error;
 /// Named results, sorted by name.
 pub type Results = BTreeMap<String, f64>;
 
+/// (x, y, r) of every grain (m), by id.
+pub type GrainDisks = Vec<[f64; 3]>;
+
 /// Momentum of the fluid and of the grains (kg·m/s per metre of depth).
 pub type MomentumPair = [[f64; 2]; 2];
 
@@ -47,6 +50,8 @@ pub struct Inputs<'a> {
     pub momentum: Option<(MomentumPair, MomentumPair)>,
     /// (id, radius m) of every grain of a coupled run.
     pub grain_radius: Vec<(u64, f64)>,
+    /// (x, y, r) of every grain of a coupled run when it started and at the end (m), by id.
+    pub grains: Option<(GrainDisks, GrainDisks)>,
 }
 
 /// The result names a scene's analyses will produce (to validate checks before running).
@@ -100,6 +105,17 @@ pub fn result_names(scene: &ValidScene) -> Vec<String> {
                 ]
                 .map(|q| format!("dkt.{q}")),
             ),
+            Analysis::ColumnCollapse { .. } => {
+                names.extend(collapse::QUANTITIES.map(|q| format!("collapse.{q}")));
+                names.extend(
+                    [
+                        "packing_fraction",
+                        "pore_pressure_min_pa",
+                        "pore_pressure_max_pa",
+                    ]
+                    .map(|q| format!("collapse.{q}")),
+                );
+            }
             Analysis::MomentumBalance => names.extend(
                 [
                     "relative_drift",
@@ -181,6 +197,18 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
                 upper,
                 *contact_gap_m,
                 *average_last_s,
+                &mut r,
+            )?,
+            Analysis::ColumnCollapse {
+                wall_x_m,
+                floor_y_m,
+                deposit,
+                pore_pressure,
+            } => collapse::submerged(
+                inp,
+                (*wall_x_m, *floor_y_m),
+                deposit,
+                pore_pressure.as_deref(),
                 &mut r,
             )?,
             Analysis::MomentumBalance => {

@@ -11,14 +11,21 @@ use super::exchange::{Coupler, CouplingError, Unstable};
 use super::ghosts::{GhostState, GrainHalo};
 use super::map::{GrainView, SlabFrame};
 use super::sums::{total, ColumnSums, Load};
-use crate::dem::{DemSetup, DemSystem, Grains, SlabDem, Wall};
+use crate::dem::{DemSetup, DemSystem, Grains, SlabDem};
 use crate::lbm::lattice::{Face, FaceCondition};
 use crate::lbm::moving::MovingCells;
 use crate::lbm::{FluidBackend, Real};
 use crate::run::RunError;
-use crate::scene::coupling::{grain_scene, MIN_CELLS_PER_DIAMETER};
+use crate::scene::coupling::grain_scene;
 use crate::scene::{Units, ValidScene};
 use decomposition::{Comm, SlabPartition};
+
+mod report;
+mod repulsion;
+mod setup;
+
+pub use setup::wall_count;
+use setup::{check_grains, fluid_walls, slab_error, substeps_for};
 
 /// Where a grain in view comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,7 +120,7 @@ impl LbmDem {
         // Static buoyancy by reduced gravity (1 − ρ/ρ_s) g (seed §5.4, eq. 5.57).
         let gravity = [g[0] * (1.0 - rho_ratio), g[1] * (1.0 - rho_ratio)];
         let mut walls = gs.walls();
-        walls.extend(fluid_walls(faces, domain, spec.contact.friction));
+        walls.extend(fluid_walls(faces, domain, spec.contact.friction, &walls));
         let bounds: Vec<f64> = (0..=comm.size())
             .map(|r| {
                 let x = if r < comm.size() {
@@ -124,9 +131,13 @@ impl LbmDem {
                 x as f64 * units.dx_m
             })
             .collect();
-        let (grains, restored) = match restored {
-            Some(mut r) => (std::mem::take(&mut r.grains), Some(r)),
-            None => (crate::run_grains::sample::prepare(&gs, comm)?.0, None),
+        // A settled sample's grains press into each other by their contact overlaps.
+        let (grains, restored, settled) = match restored {
+            Some(mut r) => (std::mem::take(&mut r.grains), Some(r), true),
+            None => {
+                let (g, settle_steps) = crate::run_grains::sample::prepare(&gs, comm)?;
+                (g, None, settle_steps > 0)
+            }
         };
         check_grains(&grains, domain, units.dx_m).map_err(|(k, m)| invalid(k, m))?;
         let substeps = substeps_for(coupling, &gs, &grains, units.dt_s);
@@ -141,7 +152,8 @@ impl LbmDem {
         let fresh = restored.is_none();
         let (mut dem, per_grain) = match restored {
             None => {
-                let d = SlabDem::new(grains, &bounds, setup, spec.allow_overlap, comm);
+                let overlap = spec.allow_overlap || settled;
+                let d = SlabDem::new(grains, &bounds, setup, overlap, comm);
                 (d.map_err(|e| slab_error(scene, e))?, Vec::new())
             }
             Some(r) => {
@@ -514,74 +526,6 @@ impl LbmDem {
         Ok(())
     }
 
-    /// Glowinski et al. (2001) short-range repulsion between grains closer than `range`
-    /// and between grains and walls closer than `range` (walls count as a mirror grain),
-    /// added to each owned grain's held force: partners in id order, then walls in order.
-    fn add_repulsion(&self, range: f64, strength: f64, held: &mut [[f64; 3]]) {
-        let (dx, gr) = (self.units.dx_m, self.reduced_gravity);
-        let g = &self.dem.system.grains;
-        // Candidates on a grid of cells as wide as the largest reach.
-        let rmax = self.views.iter().map(|v| v.radius * dx).fold(0.0, f64::max);
-        let cell = 2.0 * rmax + range;
-        let key = |v: &GrainView| {
-            (
-                (v.centre[0] * dx / cell).floor() as i64,
-                (v.centre[1] * dx / cell).floor() as i64,
-            )
-        };
-        let mut grid: std::collections::BTreeMap<(i64, i64), Vec<u32>> = Default::default();
-        for (j, v) in self.views.iter().enumerate() {
-            grid.entry(key(v)).or_default().push(j as u32);
-        }
-        let mut near = Vec::new();
-        for (i, h) in held.iter_mut().enumerate() {
-            let vi = self.view_of[i] as usize;
-            let (cx, cy) = key(&self.views[vi]);
-            near.clear();
-            for a in -1..=1 {
-                for b in -1..=1 {
-                    if let Some(list) = grid.get(&(cx + a, cy + b)) {
-                        near.extend_from_slice(list);
-                    }
-                }
-            }
-            // View indices are in id order.
-            near.sort_unstable();
-            let wi = self.mass[vi] * gr;
-            for &j in &near {
-                let j = j as usize;
-                if j == vi {
-                    continue;
-                }
-                let (pi, pj) = (&self.views[vi], &self.views[j]);
-                let (ddx, ddy) = (
-                    (pj.centre[0] - pi.centre[0]) * dx,
-                    (pj.centre[1] - pi.centre[1]) * dx,
-                );
-                let d = ddx.hypot(ddy);
-                let gap = d - (pi.radius + pj.radius) * dx;
-                if gap < range && d > 0.0 {
-                    let w = wi.min(self.mass[j] * gr);
-                    let f = strength * w * ((range - gap) / range).powi(2);
-                    // Pushes grain i away from grain j.
-                    h[0] -= f * ddx / d;
-                    h[1] -= f * ddy / d;
-                }
-            }
-            for w in self.dem.system.walls.iter().filter(|w| !w.removed) {
-                let c = w.closest_point([g.x[i], g.y[i]]);
-                let (ddx, ddy) = (g.x[i] - c[0], g.y[i] - c[1]);
-                let d = ddx.hypot(ddy);
-                let gap = d - g.r[i];
-                if gap < range && d > 0.0 {
-                    let f = strength * wi * ((range - gap) / range).powi(2);
-                    h[0] += f * ddx / d;
-                    h[1] += f * ddy / d;
-                }
-            }
-        }
-    }
-
     /// Stage "coupling" after the grains moved: see [`Coupler::remap`]; the hand-over is
     /// summed on the owners. Collective.
     pub fn remap<T: Real>(&mut self, fluid: &mut dyn FluidBackend<T>, comm: &dyn Comm) {
@@ -590,112 +534,6 @@ impl LbmDem {
             self.handover = self.reduce(Which::Handover, comm);
         }
     }
-
-    /// Momentum (kg·m/s per metre of depth) of the fluid outside the grains and of the
-    /// grains (with force averaging, including the half step of force still in transit):
-    /// the two halves of the momentum balance, the same bits on any rank count. Collective.
-    pub fn momentum<T: Real>(
-        &self,
-        fluid: &mut dyn FluidBackend<T>,
-        comm: &dyn Comm,
-    ) -> ([f64; 2], [f64; 2]) {
-        let u = self.units;
-        let columns: Vec<f64> = self
-            .coupler
-            .fluid_momentum_columns(fluid)
-            .iter()
-            .flat_map(|c| *c)
-            .collect();
-        let all = comm.all_gather_f64(&columns);
-        let mut j = [0.0; 2];
-        for c in all.chunks_exact(2) {
-            j[0] += c[0];
-            j[1] += c[1];
-        }
-        // Lattice momentum of a cell → ρ Δx² (mass per depth) × Δx/Δt.
-        let scale = u.density_kg_m3 * u.dx_m.powi(3) / u.dt_s;
-        let sys = &self.dem.system;
-        let g = &sys.grains;
-        let mut rows = Vec::new();
-        for i in 0..sys.owned() {
-            // Half of the last step's force is still to be handed to the grains.
-            let transit: &[f64] = if self.average {
-                sys.carry(i)
-            } else {
-                &[0.0; 3]
-            };
-            rows.extend_from_slice(&[
-                f64::from_bits(g.id[i]),
-                g.m[i] * g.vx[i],
-                g.m[i] * g.vy[i],
-                0.5 * transit[0] * u.dt_s,
-                0.5 * transit[1] * u.dt_s,
-            ]);
-        }
-        let all = comm.all_gather_f64(&rows);
-        let mut sorted: Vec<&[f64]> = all.chunks_exact(5).collect();
-        sorted.sort_by_key(|r| r[0].to_bits());
-        let mut p = [0.0; 2];
-        for r in &sorted {
-            p[0] += r[1];
-            p[1] += r[2];
-        }
-        for r in &sorted {
-            p[0] += r[3];
-            p[1] += r[4];
-        }
-        ([j[0] * scale, j[1] * scale], p)
-    }
-
-    /// Every grain's (id, radius m), sorted by id. Collective.
-    pub fn radii(&self, comm: &dyn Comm) -> Vec<(u64, f64)> {
-        let sys = &self.dem.system;
-        let mine: Vec<f64> = (0..sys.owned())
-            .flat_map(|i| [f64::from_bits(sys.grains.id[i]), sys.grains.r[i]])
-            .collect();
-        let mut all: Vec<(u64, f64)> = comm
-            .all_gather_f64(&mine)
-            .chunks_exact(2)
-            .map(|p| (p[0].to_bits(), p[1]))
-            .collect();
-        all.sort_by_key(|p| p.0);
-        all
-    }
-
-    /// Grain `id`'s x, y, vx, vy, ω and hydrodynamic fx, fy (SI) from the rank that owns
-    /// it, on every rank; `None` when no rank has it. Collective.
-    pub fn probe(&self, id: u64, comm: &dyn Comm) -> Option<[f64; 7]> {
-        let sys = &self.dem.system;
-        let g = &sys.grains;
-        let mine: Vec<f64> = (0..sys.owned())
-            .find(|&i| g.id[i] == id)
-            .map(|i| {
-                let f = self.hydrodynamic(i);
-                vec![g.x[i], g.y[i], g.vx[i], g.vy[i], g.omega[i], f[0], f[1]]
-            })
-            .unwrap_or_default();
-        let all = comm.all_gather_f64(&mine);
-        (all.len() >= 7).then(|| std::array::from_fn(|k| all[k]))
-    }
-
-    /// Walls of the DEM (the scene's, then one per wall face of the fluid).
-    pub fn wall_count(&self) -> usize {
-        self.dem.system.walls.len()
-    }
-
-    /// Per owned grain: external force held (SI), previous hydrodynamic force (SI) and the
-    /// pending hand-over (lattice units), for checkpoints.
-    pub fn per_grain_state(&self) -> Vec<[f64; 9]> {
-        let sys = &self.dem.system;
-        (0..sys.owned())
-            .map(|i| {
-                let e = sys.external().get(i).copied().unwrap_or([0.0; 3]);
-                let p = sys.carry(i);
-                let h = self.handover[i];
-                [e[0], e[1], e[2], p[0], p[1], p[2], h[0], h[1], h[2]]
-            })
-            .collect()
-    }
 }
 
 /// Which per-column sums to reduce.
@@ -703,87 +541,4 @@ impl LbmDem {
 enum Which {
     Exchange,
     Handover,
-}
-
-/// How many DEM walls a coupled scene has: its own, then one per wall face of the fluid
-/// (what a checkpoint of it holds).
-pub fn wall_count(scene: &ValidScene) -> Result<usize, RunError> {
-    let built = crate::scene::build_lattice(scene)?;
-    let spec = scene.scene.grains.as_ref().map_or(0, |g| g.walls.len());
-    let faces = fluid_walls(&built.setup.faces, [1.0, 1.0], 0.0).len();
-    Ok(spec + faces)
-}
-
-/// DEM sub-steps per fluid step: the scene's, or n_s = ⌊Δt/Δt_D⌋ + 1 (seed eq. 5.61).
-fn substeps_for(
-    c: &crate::scene::coupling::CouplingSpec,
-    gs: &crate::scene::ValidGrainScene,
-    grains: &Grains,
-    dt: f64,
-) -> u32 {
-    c.substeps
-        .unwrap_or_else(|| (dt / gs.time_step(grains)).floor() as u32 + 1)
-}
-
-/// Refuse grains outside the domain or under three cells across: (key, message).
-fn check_grains(g: &Grains, domain: [f64; 2], dx: f64) -> Result<(), (&'static str, String)> {
-    for i in 0..g.len() {
-        let (x, y, r) = (g.x[i], g.y[i], g.r[i]);
-        if x - r < 0.0 || y - r < 0.0 || x + r > domain[0] || y + r > domain[1] {
-            return Err((
-                "sample",
-                format!(
-                    "grain {} at ({x}, {y}) m with radius {r} m is not wholly inside the \
-                     fluid domain [0, 0]–{domain:?} m; move it inside",
-                    g.id[i]
-                ),
-            ));
-        }
-        let cells = 2.0 * r / dx;
-        if cells < MIN_CELLS_PER_DIAMETER {
-            return Err((
-                "sample",
-                format!(
-                    "grain {} is {cells:.2} cells across; the coupling needs at least \
-                     {MIN_CELLS_PER_DIAMETER}: refine the lattice or use larger grains",
-                    g.id[i]
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// A DEM error from spreading the grains over the slabs, as a scene error.
-fn slab_error(scene: &ValidScene, e: crate::dem::DemError) -> RunError {
-    match e {
-        crate::dem::DemError::Parameter { name: "ranks", .. } => scene
-            .invalid(
-                "ranks",
-                format!("{e} (the grains follow the fluid's slabs)"),
-            )
-            .into(),
-        e => e.into(),
-    }
-}
-
-/// A DEM wall along every wall face (bounce-back, moving or free-slip) of the fluid, so
-/// grains cannot leave through them; friction `mu`.
-fn fluid_walls(faces: &[FaceCondition; 4], domain: [f64; 2], mu: f64) -> Vec<Wall> {
-    let [lx, ly] = domain;
-    let ends = [
-        (Face::West, [0.0, 0.0], [0.0, ly]),
-        (Face::East, [lx, 0.0], [lx, ly]),
-        (Face::South, [0.0, 0.0], [lx, 0.0]),
-        (Face::North, [0.0, ly], [lx, ly]),
-    ];
-    ends.iter()
-        .filter(|(f, _, _)| {
-            matches!(
-                faces[*f as usize],
-                FaceCondition::Wall { .. } | FaceCondition::FreeSlip
-            )
-        })
-        .map(|&(_, a, b)| Wall::fixed(a, b, mu))
-        .collect()
 }

@@ -29,6 +29,8 @@ pub struct CoupledState<'a> {
     pub per_grain: Vec<[f64; 9]>,
     /// Fluid and grain momentum at step 0 (kg m/s per m), when the run tracks it.
     pub momentum_initial: Option<MomentumPair>,
+    /// (x, y, r) of every grain at step 0 (m), by id (the same on every rank).
+    pub initial: &'a [[f64; 3]],
 }
 
 /// Write the checkpoint of a coupled run (collective, atomic).
@@ -49,8 +51,9 @@ pub fn write<T: H5Type + Copy>(
         (true, Some(m)) => vec![m[0][0], m[0][1], m[1][0], m[1][1]],
         _ => Vec::new(),
     };
+    let initial: Vec<f64> = grains.initial.iter().flatten().copied().collect();
     let more = |file: &hdf5::File, access: Access| -> hdf5::Result<()> {
-        write_dem(file, access, grains.dem, &[], comm)?;
+        write_dem(file, access, grains.dem, &initial, comm)?;
         let c = file.create_group("coupling")?;
         for (name, v) in [("dem_time_s", sys.time), ("dem_steps", sys.steps as f64)] {
             c.new_attr::<f64>()
@@ -64,14 +67,19 @@ pub fn write<T: H5Type + Copy>(
     checkpoint::write_with(path, comm, lattice, run, &more)
 }
 
+/// What a coupled checkpoint holds besides the fluid.
+pub struct CoupledRestart {
+    /// The grains' state to restart from.
+    pub grains: RestoredCoupling,
+    /// Fluid and grain momentum at step 0, if recorded.
+    pub momentum_initial: Option<MomentumPair>,
+    /// (x, y, r) of every grain at step 0 (m), by id.
+    pub initial: Vec<[f64; 3]>,
+}
+
 /// The grains of a coupled checkpoint (every rank reads everything); `walls` is the
-/// scene's wall count (its own and the fluid's wall faces). Returns the state to restart
-/// from and the momentum at step 0, if recorded. Collective.
-pub fn read(
-    path: &Path,
-    comm: &dyn Comm,
-    walls: usize,
-) -> Result<(RestoredCoupling, Option<MomentumPair>), OutputError> {
+/// scene's wall count (its own and the fluid's wall faces). Collective.
+pub fn read(path: &Path, comm: &dyn Comm, walls: usize) -> Result<CoupledRestart, OutputError> {
     let c = open_checked(path, comm, (FORMAT, FORMAT_VERSION), "a coupled")?;
     if c.file.group("dem").is_err() {
         return Err(OutputError::Checkpoint {
@@ -97,15 +105,20 @@ pub fn read(
         .collect();
     per_grain.sort_by_key(|r| r.0);
     let m = c.rows("coupling/momentum_initial", 4)?;
-    let momentum = (m.len() == 4).then(|| [[m[0], m[1]], [m[2], m[3]]]);
-    Ok((
-        RestoredCoupling {
+    let initial = c
+        .rows("dem/initial", 3)?
+        .chunks_exact(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    Ok(CoupledRestart {
+        grains: RestoredCoupling {
             grains,
             history,
             walls,
             clock,
             per_grain,
         },
-        momentum,
-    ))
+        momentum_initial: (m.len() == 4).then(|| [[m[0], m[1]], [m[2], m[3]]]),
+        initial,
+    })
 }

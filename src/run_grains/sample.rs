@@ -87,6 +87,13 @@ pub(crate) fn prepare(scene: &ValidGrainScene, comm: &dyn Comm) -> Result<(Grain
     };
     let mut d = start(scene, grains, true, comm)?;
     d.system.global_damping = st.damping_1_s;
+    if let Some(f) = st.friction {
+        d.system.model.friction = f;
+        d.system.model.rolling_friction = 0.0;
+        for w in &mut d.system.walls {
+            w.friction = f;
+        }
+    }
     let mut steps = 0;
     let n = d.global_count(comm) as f64;
     loop {

@@ -205,6 +205,11 @@ pub struct SettleSpec {
     /// settled column to a flat surface.
     #[serde(default)]
     pub trim_above_m: Option<f64>,
+    /// Friction of every contact (grain–grain and grain–wall) while settling, with no
+    /// rolling resistance: 0 settles the densest packing, the sample's own friction (the
+    /// default) a looser one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
 }
 
 /// A straight wall segment.

@@ -158,6 +158,15 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
                 if st.max_steps == 0 {
                     return Err(ctx.err("max_steps", 0, "must be at least 1"));
                 }
+                if let Some(f) = st.friction {
+                    if !(f >= 0.0 && f.is_finite()) {
+                        return Err(ctx.err(
+                            "friction",
+                            0,
+                            format!("the settling friction must be 0 or positive, got {f}"),
+                        ));
+                    }
+                }
             }
         }
         SampleSpec::List { grains } => {

@@ -413,15 +413,27 @@ pub enum Probe {
         /// Grain id (the sample's order, from 0).
         id: u64,
     },
+    /// The deposit of the grains of a coupled scene against a wall (as the column-collapse
+    /// analysis measures it): its front, the farthest edge from the wall (m), and its
+    /// height above the floor (m).
+    Deposit {
+        /// Name (unique).
+        name: String,
+        /// The wall behind the grains (m).
+        wall_x_m: f64,
+        /// The floor (m).
+        floor_y_m: f64,
+    },
 }
 
 impl Probe {
     /// The probe's name.
     pub fn name(&self) -> &str {
         match self {
-            Probe::Point { name, .. } | Probe::Force { name, .. } | Probe::Grain { name, .. } => {
-                name
-            }
+            Probe::Point { name, .. }
+            | Probe::Force { name, .. }
+            | Probe::Grain { name, .. }
+            | Probe::Deposit { name, .. } => name,
         }
     }
 }
@@ -506,6 +518,24 @@ pub enum Analysis {
     /// Momentum of fluid plus grains: `momentum.relative_drift` = |p_end − p_0| / |p_0|
     /// (needs non-zero initial momentum), and `momentum.grains_x_kg_m_s` etc.
     MomentumBalance,
+    /// Collapse of a column of grains in the fluid (Lajeunesse et al. 2005 geometry; Rondon
+    /// et al. 2011 submerged): the `collapse.*` results of a grains run (run-out, heights,
+    /// a, the laws' ratios), `collapse.packing_fraction` of the column (disk area over
+    /// L_i H_i), `collapse.stop_time` = t₉₅/τ_c from a deposit probe (when the front reached
+    /// 95 % of its final run-out; τ_c = √(H_i/g)), and `collapse.pore_pressure_min_pa` /
+    /// `_max_pa` from a point probe (the fluid carries no hydrostatic pressure: grains feel
+    /// reduced gravity, so a probe's pressure is the excess pore pressure).
+    ColumnCollapse {
+        /// The wall behind the column (m).
+        wall_x_m: f64,
+        /// The floor (m).
+        floor_y_m: f64,
+        /// Deposit probe that times the collapse.
+        deposit: String,
+        /// Point probe for the pore pressure (e.g. at the floor under the column).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        pore_pressure: Option<String>,
+    },
 }
 
 /// A pass/fail check on a named quantity. Give `max`, `min`, or `expected` with

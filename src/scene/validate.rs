@@ -421,6 +421,15 @@ fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(), SceneErr
                     ));
                 }
             }
+            Probe::Deposit { name, .. } => {
+                if s.grains.is_none() {
+                    return Err(ctx.err(
+                        "kind",
+                        0,
+                        format!("deposit probe `{name}` needs grains: add [grains] and [coupling]"),
+                    ));
+                }
+            }
         }
     }
     let probe_kind = |name: &str| s.probes.iter().find(|p| p.name() == name);
@@ -498,6 +507,35 @@ fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(), SceneErr
                     *average_last_s,
                     "the averaging window",
                 )?;
+            }
+            Analysis::ColumnCollapse {
+                deposit,
+                pore_pressure,
+                ..
+            } => {
+                if s.grains.is_none() {
+                    return Err(ctx.err(
+                        "kind",
+                        0,
+                        "column-collapse in a fluid scene needs grains: add [grains] and [coupling]",
+                    ));
+                }
+                if !matches!(probe_kind(deposit), Some(Probe::Deposit { .. })) {
+                    return Err(ctx.err(
+                        "deposit",
+                        0,
+                        format!("column-collapse needs a deposit probe named `{deposit}`"),
+                    ));
+                }
+                if let Some(p) = pore_pressure {
+                    if !matches!(probe_kind(p), Some(Probe::Point { .. })) {
+                        return Err(ctx.err(
+                            "pore_pressure",
+                            0,
+                            format!("column-collapse needs a point probe named `{p}`"),
+                        ));
+                    }
+                }
             }
             Analysis::MomentumBalance if s.grains.is_none() => {
                 return Err(ctx.err(
