@@ -38,7 +38,7 @@ def main():
             print(
                 f"| {rs['collapse.aspect_ratio']:.2f} | {p} | {rs['collapse.packing_fraction']:.3f} "
                 f"| {rd['collapse.runout']:.3f} | {rs['collapse.runout']:.3f} | {ratio:.2f} "
-                f"| {rd['collapse.stop_time']:.1f} | {rs['collapse.stop_time']:.1f} "
+                f"| {rd.get('collapse.front_t95', float('nan')):.1f} | {rs.get('collapse.front_t95', rs['collapse.stop_time']):.1f} "
                 f"| {rs['collapse.pore_pressure_min_pa']:+.1f} / {rs['collapse.pore_pressure_max_pa']:+.1f} |"
             )
 

@@ -72,6 +72,17 @@ pub enum Command {
         #[arg(long, value_enum)]
         gpu_storage: Option<GpuStorageArg>,
     },
+    /// Measure the stability limits `check` uses: the fluid's map over τ, lattice Mach
+    /// number and operator (a shear layer and a cavity), the DEM's time-step factor λ and the
+    /// MPM's Courant number. Writes jobs/stability/*.csv (rebuild to ship them).
+    StabilityMap {
+        /// Output folder (default: jobs/stability).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Validate a scene and print the derived lattice parameters and memory estimate.
     Check {
         /// Scene file (TOML).

@@ -21,3 +21,4 @@ pub mod run_grains;
 pub mod run_mpm;
 pub mod scene;
 pub mod simulation;
+pub mod stability;

@@ -78,6 +78,7 @@ fn real_main() -> Result<i32> {
                     println!("{}: valid grains scene", g.path.display());
                     println!("  title: {}", g.scene.title);
                     println!("  walls: {}", g.scene.grains.walls.len());
+                    println!("  stability: {}", dem_verdict(g.lambda()));
                     for w in &g.warnings {
                         println!("  warning: {w}");
                     }
@@ -95,11 +96,49 @@ fn real_main() -> Result<i32> {
                         "  time step: {:.4e} s (CFL limit {:.4e} s)",
                         m.setup.dt, m.critical_dt
                     );
+                    let c = m.setup.dt / m.critical_dt;
+                    let verdict = match grainflow::stability::mpm::courant_limit(
+                        grainflow::stability::MPM_CSV,
+                    ) {
+                        Some(l) if c <= l => format!(
+                            "Courant number {c:.3}: inside the measured stable range (stable up to {l}, jobs/stability/mpm-courant.csv)"
+                        ),
+                        Some(l) => format!(
+                            "Courant number {c:.3}: likely unstable (measured stable only up to {l}): shorten the time step"
+                        ),
+                        None => format!("Courant number {c:.3}: no measured limit"),
+                    };
+                    println!("  stability: {verdict}");
                     for w in &m.warnings {
                         println!("  warning: {w}");
                     }
                 }
             }
+            Ok(0)
+        }
+        Command::StabilityMap { out, threads } => {
+            if let Some(t) = threads {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build_global()
+                    .context("setting up the thread pool")?;
+            }
+            let dir = out.unwrap_or_else(|| std::path::PathBuf::from("jobs/stability"));
+            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            let mpm = match scene::load_any(std::path::Path::new("tests/scenes/mpm_collapse.toml"))?
+            {
+                scene::AnyScene::Mpm(m) => m,
+                _ => anyhow::bail!("tests/scenes/mpm_collapse.toml is not an MPM scene"),
+            };
+            let t = std::time::Instant::now();
+            let summary = grainflow::stability::write_maps(&dir, &mpm)
+                .with_context(|| format!("writing the maps into {}", dir.display()))?;
+            print!("{summary}");
+            println!(
+                "wrote {}/lbm-map.csv, dem-lambda.csv, mpm-courant.csv in {:.0} s",
+                dir.display(),
+                t.elapsed().as_secs_f64()
+            );
             Ok(0)
         }
         Command::Run {
@@ -366,6 +405,19 @@ fn describe_bounds(c: &grainflow::analysis::checks::CheckOutcome) -> String {
     parts.join(" ")
 }
 
+/// The DEM time-step factor λ against the measured limit (jobs/stability/dem-lambda.csv).
+fn dem_verdict(lambda: f64) -> String {
+    match grainflow::stability::dem::lambda_limit(grainflow::stability::DEM_CSV) {
+        Some(l) if lambda <= l => format!(
+            "time-step factor λ = {lambda:.3}: inside the measured stable range (energy does not grow up to λ = {l}, jobs/stability/dem-lambda.csv)"
+        ),
+        Some(l) => format!(
+            "time-step factor λ = {lambda:.3}: likely unstable (energy measured not to grow only up to λ = {l}): lower lambda"
+        ),
+        None => format!("time-step factor λ = {lambda:.3}: no measured limit"),
+    }
+}
+
 fn print_check(s: &scene::ValidScene) {
     let u = &s.units;
     let [nx, ny] = s.scene.domain.cells;
@@ -386,6 +438,22 @@ fn print_check(s: &scene::ValidScene) {
     println!("  relaxation time  τ = {:.6}", u.tau);
     println!("  lattice ν        {:.6e}", u.nu_lattice);
     println!("  lattice velocity {:.6} (Mach {:.4})", u.u_lattice, u.mach);
+    let family = match s.scene.fluid.collision {
+        scene::CollisionModel::Bgk => "bgk",
+        scene::CollisionModel::Trt { .. } => "trt",
+        scene::CollisionModel::Mrt { .. } => "mrt",
+    };
+    let op = grainflow::stability::lbm::Operator::ALL
+        .into_iter()
+        .find(|o| {
+            o.family == family && o.smagorinsky == s.scene.fluid.smagorinsky_constant.is_some()
+        })
+        .expect("every operator is in the map");
+    let verdict = grainflow::stability::StabilityMap::builtin().verdict(&op, u.tau, u.mach);
+    println!(
+        "  stability        {}",
+        verdict.describe(&op, u.tau, u.mach)
+    );
     println!("  Reynolds number  {:.4}", u.reynolds);
     println!("  steps            {}", step_count(s, None));
     let cells = ((nx + 2) * (ny + 2)) as f64;
@@ -415,6 +483,7 @@ fn print_check(s: &scene::ValidScene) {
                     .map(|n| n.to_string())
                     .unwrap_or_else(|| "packed at run time".into())
             );
+            println!("  DEM stability    {}", dem_verdict(p.dem_lambda));
         }
         Ok(None) => {}
         Err(e) => println!("  coupling: {e}"),

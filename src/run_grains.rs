@@ -185,6 +185,20 @@ pub fn run_grains(
         .map_or(s.run.output_every_s, |r| r.next_output_s);
     let start_step = resume.as_ref().map_or(0, |r| r.step);
     let mut stop_time = None;
+    // The deposit's front every 1000 steps (column collapses), for the time it reaches 95 %
+    // of its run-out.
+    let collapse_at = s
+        .analyses
+        .iter()
+        .map(|a| match a {
+            GrainAnalysis::ColumnCollapse {
+                wall_x_m,
+                floor_y_m,
+                ..
+            } => (*wall_x_m, *floor_y_m),
+        })
+        .next();
+    let mut fronts: Vec<(f64, f64)> = Vec::new();
     let mut status = Status::Ok;
     let mut error = None;
     let flags = crate::run::signal_flags();
@@ -221,6 +235,10 @@ pub fn run_grains(
         step += 1;
         stage[1] += t.elapsed().as_secs_f64();
         let t = Instant::now();
+        if let (Some((wx, fy)), true) = (collapse_at, step % 1000 == 0 && start_step == 0) {
+            let g = gather_grains(&d.system, comm);
+            fronts.push((d.system.time, pile_shape(&g.x, &g.y, &g.r, wx, fy).length_m));
+        }
         if step % 100 == 0 || step == total_steps {
             let (ke, _, _) = global_state(&d, comm);
             if !ke.is_finite() {
@@ -296,6 +314,13 @@ pub fn run_grains(
                 for (k, v) in QUANTITIES.iter().zip(values) {
                     results.insert(format!("collapse.{k}"), v);
                 }
+                // When the front first reached 95 % of its run-out, in τ_c (not after a
+                // restart: the series before it is gone).
+                let target = before.length_m + 0.95 * (after.length_m - before.length_m);
+                let t95 = fronts.iter().find(|f| f.1 >= target).map_or(f64::NAN, |f| {
+                    (f.0 - last_removal) / (before.height_m / g_abs).sqrt()
+                });
+                results.insert("collapse.front_t95".into(), t95);
             }
         }
     }

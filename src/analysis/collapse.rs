@@ -169,6 +169,7 @@ pub fn submerged(
     for (k, v) in QUANTITIES.iter().zip(values) {
         r.insert(format!("collapse.{k}"), v);
     }
+    r.insert("collapse.front_t95".into(), values[7]);
     // The column: grains within it at the start (all of them, for a column behind a gate).
     let area: f64 = start
         .iter()

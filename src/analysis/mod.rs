@@ -109,6 +109,7 @@ pub fn result_names(scene: &ValidScene) -> Vec<String> {
                 names.extend(collapse::QUANTITIES.map(|q| format!("collapse.{q}")));
                 names.extend(
                     [
+                        "front_t95",
                         "packing_fraction",
                         "pore_pressure_min_pa",
                         "pore_pressure_max_pa",

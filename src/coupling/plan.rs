@@ -24,6 +24,9 @@ pub struct CouplingPlan {
     pub substeps: u32,
     /// Whether the force of two steps is averaged.
     pub force_averaging: bool,
+    /// The DEM step actually taken (Δt / n_s) as a fraction of the lightest grain's
+    /// critical step: the effective λ of seed eq. 5.60.
+    pub dem_lambda: f64,
 }
 
 /// The plan of a coupled scene; `None` for a fluid-only scene.
@@ -52,7 +55,9 @@ pub fn plan(scene: &ValidScene) -> Result<Option<CouplingPlan>, RunError> {
     let substeps = c
         .substeps
         .unwrap_or_else(|| (scene.units.dt_s / dt_d).floor() as u32 + 1);
+    let dt_cr = crate::dem::stable_time_step(&lightest, &gs.contact_model(), 1.0);
     Ok(Some(CouplingPlan {
+        dem_lambda: scene.units.dt_s / substeps as f64 / dt_cr,
         scheme: c.scheme,
         grains: count,
         cells_per_diameter: (2.0 * rmin / scene.units.dx_m, 2.0 * rmax / scene.units.dx_m),

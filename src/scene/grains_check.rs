@@ -28,6 +28,7 @@ pub fn grain_result_names(s: &GrainScene) -> Vec<String> {
                 for q in crate::analysis::collapse::QUANTITIES {
                     names.push(format!("collapse.{q}"));
                 }
+                names.push("collapse.front_t95".into());
             }
         }
     }
