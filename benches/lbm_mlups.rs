@@ -1,7 +1,9 @@
 //! MLUPS of the fused stream–collide on a 1024 × 1024 periodic box: BGK and MRT (plus TRT),
-//! f32 and f64, on 1 and 2 threads. Criterion times one step; MLUPS = cells / time.
-//! Bytes per update implied by the two-array kernel: 2 × 9 × sizeof(T) (read + write), plus
-//! 9 × sizeof(T) of write-allocate traffic: 216 B (f64) and 108 B (f32).
+//! f32 and f64, on 1 and 2 threads, with the two-array kernel and in place (the AA pattern;
+//! its push and local steps alternate, so a sample averages both). Criterion times one step;
+//! MLUPS = cells / time. Bytes per update: the two-array kernel moves 2 × 9 × sizeof(T) plus,
+//! in f32, 9 × sizeof(T) of write-allocate (f64 streams its stores): 144 B (f64), 108 B (f32);
+//! in place, 2 × 9 × sizeof(T): 144 B (f64), 72 B (f32).
 mod common;
 use common::periodic_box;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -18,10 +20,18 @@ fn bench_one<T: Real>(c: &mut Criterion, name: &str, collision: Collision) {
             .num_threads(threads)
             .build()
             .unwrap();
-        let mut lat = periodic_box::<T>(N, N, collision);
-        group.bench_function(format!("{name}/{}/{threads}t", T::NAME), |b| {
-            b.iter(|| pool.install(|| lat.step().unwrap()));
-        });
+        for in_place in [false, true] {
+            let mut lat = periodic_box::<T>(N, N, collision);
+            let kernel = if in_place {
+                lat.make_in_place();
+                "in-place"
+            } else {
+                "two-array"
+            };
+            group.bench_function(format!("{name}/{}/{kernel}/{threads}t", T::NAME), |b| {
+                b.iter(|| pool.install(|| lat.step().unwrap()));
+            });
+        }
     }
     group.finish();
 }

@@ -39,6 +39,17 @@ pub enum GpuStorageArg {
     F16,
 }
 
+/// CPU kernel on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum KernelArg {
+    /// In place where it measured faster.
+    Auto,
+    /// Two buffers.
+    TwoArray,
+    /// One buffer (AA pattern).
+    InPlace,
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -71,6 +82,10 @@ pub enum Command {
         /// memory and traffic (f32 arithmetic; needs `--backend gpu --precision f32`).
         #[arg(long, value_enum)]
         gpu_storage: Option<GpuStorageArg>,
+        /// CPU kernel, overriding the scene's `[run] kernel`: `in-place` (the AA pattern)
+        /// halves the memory; `auto` takes it where it measured faster.
+        #[arg(long, value_enum)]
+        kernel: Option<KernelArg>,
     },
     /// Measure the stability limits `check` uses: the fluid's map over τ, lattice Mach
     /// number and operator (a shear layer and a cavity), the DEM's time-step factor λ and the

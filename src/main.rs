@@ -4,9 +4,11 @@ mod cli;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use cli::{BackendArg, Cli, Command, GpuStorageArg, PrecisionArg};
+use cli::{BackendArg, Cli, Command, GpuStorageArg, KernelArg, PrecisionArg};
 use decomposition::{launched_by_mpi, Comm, MpiComm, SingleProcess};
-use grainflow::run::{run_on, step_count, Backend, GpuStorage, Precision, RunOptions, Status};
+use grainflow::run::{
+    run_on, step_count, Backend, GpuStorage, Kernel, Precision, RunOptions, Status,
+};
 use grainflow::scene;
 
 fn main() {
@@ -151,6 +153,7 @@ fn real_main() -> Result<i32> {
             restart,
             backend,
             gpu_storage,
+            kernel,
         } => {
             let comm = communicator()?;
             let comm = comm.as_ref();
@@ -205,6 +208,11 @@ fn real_main() -> Result<i32> {
                 gpu_storage: gpu_storage.map(|g| match g {
                     GpuStorageArg::Native => GpuStorage::Native,
                     GpuStorageArg::F16 => GpuStorage::F16,
+                }),
+                kernel: kernel.map(|k| match k {
+                    KernelArg::Auto => Kernel::Auto,
+                    KernelArg::TwoArray => Kernel::TwoArray,
+                    KernelArg::InPlace => Kernel::InPlace,
                 }),
             };
             let root = comm.is_root();

@@ -23,7 +23,7 @@ use thiserror::Error;
 mod output;
 use output::Output;
 
-pub use crate::scene::{Backend, GpuStorage, Precision};
+pub use crate::scene::{Backend, GpuStorage, Kernel, Precision};
 
 /// Options from the command line that override or complement the scene.
 #[derive(Debug, Clone)]
@@ -36,6 +36,8 @@ pub struct RunOptions {
     pub backend: Option<Backend>,
     /// GPU population storage override (the scene's `[run] gpu_storage` otherwise).
     pub gpu_storage: Option<GpuStorage>,
+    /// CPU kernel override (the scene's `[run] kernel` otherwise).
+    pub kernel: Option<Kernel>,
     /// Step count override.
     pub steps: Option<u64>,
     /// Show progress (bar on a terminal, log lines otherwise).
@@ -52,6 +54,7 @@ impl RunOptions {
             precision: None,
             backend: None,
             gpu_storage: None,
+            kernel: None,
             steps: None,
             progress,
             restart,
@@ -309,7 +312,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
             }
             _ => (None, None, None),
         };
-    let mut sim = Simulation::<T>::new(scene, comm, backend, storage, restored_grains)?;
+    let kernel = opts.kernel.unwrap_or(run.kernel);
+    let mut sim = Simulation::<T>::new(scene, comm, backend, storage, kernel, restored_grains)?;
     // The momentum balance reads every fluid cell: only when an analysis asks for it.
     let wants_momentum = scene
         .scene

@@ -10,11 +10,21 @@ use crate::lbm::lattice::StepError;
 use crate::lbm::{FluidBackend, Lattice, Real};
 use crate::run::RunError;
 use crate::scene::{
-    build_lattice, solid_id_of, Backend, GpuStorage, Initial, Probe, Units, ValidScene,
+    build_lattice, solid_id_of, Backend, GpuStorage, Initial, Kernel, Probe, Units, ValidScene,
 };
 use decomposition::{Comm, Side, SlabHalo, SlabPartition};
 use std::sync::Arc;
 use std::time::Instant;
+
+/// Whether the CPU lattice runs in place: asked for, or `auto` where it measured faster
+/// (f32, `value_bytes` = 4), never with grains.
+pub fn in_place(kernel: Kernel, value_bytes: usize, grains: bool) -> bool {
+    match kernel {
+        Kernel::InPlace => !grains,
+        Kernel::TwoArray => false,
+        Kernel::Auto => !grains && value_bytes == 4,
+    }
+}
 
 /// Names of the stages of one step, in execution order.
 pub const STAGES: [&str; 8] = [
@@ -118,6 +128,7 @@ impl<T: Real> Simulation<T> {
         comm: &dyn Comm,
         backend: Backend,
         storage: GpuStorage,
+        kernel: Kernel,
         restored: Option<crate::coupling::RestoredCoupling>,
     ) -> Result<Self, RunError> {
         let built = build_lattice(scene)?;
@@ -216,6 +227,17 @@ impl<T: Real> Simulation<T> {
             }
         }
         lattice.update_boundaries();
+        if backend == Backend::Cpu && in_place(kernel, T::BYTES, scene.scene.grains.is_some()) {
+            lattice.make_in_place();
+        } else if kernel == Kernel::InPlace {
+            return Err(invalid(
+                "kernel",
+                "the in-place kernel runs on the CPU backend and without grains (their coupling \
+                 reads the previous buffer): use kernel = \"two-array\" or \"auto\""
+                    .into(),
+            )
+            .into());
+        }
         let mut fluid: Box<dyn FluidBackend<T>> = match backend {
             Backend::Cpu => Box::new(lattice),
             Backend::Gpu => Box::new(GpuFluid::new(

@@ -9,7 +9,7 @@ mod common;
 use common::{assert_checks_pass, root};
 use decomposition::SingleProcess;
 use grainflow::lbm::Real;
-use grainflow::run::{run, Backend, GpuStorage, Precision, RunOptions, Status};
+use grainflow::run::{run, Backend, GpuStorage, Kernel, Precision, RunOptions, Status};
 use grainflow::simulation::Simulation;
 use std::path::Path;
 use std::process::Command;
@@ -48,10 +48,18 @@ fn compare<T: Real>(scene_path: &str, steps: usize, tolerance: f64) {
 fn compare_stored<T: Real>(scene_path: &str, steps: usize, tolerance: f64, storage: GpuStorage) {
     let scene = grainflow::scene::load(&root().join(scene_path)).unwrap_or_else(|e| panic!("{e}"));
     let comm = SingleProcess;
-    let mut cpu = Simulation::<T>::new(&scene, &comm, Backend::Cpu, GpuStorage::Native, None)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let mut gpu = Simulation::<T>::new(&scene, &comm, Backend::Gpu, storage, None)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let mut cpu = Simulation::<T>::new(
+        &scene,
+        &comm,
+        Backend::Cpu,
+        GpuStorage::Native,
+        Kernel::TwoArray,
+        None,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mut gpu =
+        Simulation::<T>::new(&scene, &comm, Backend::Gpu, storage, Kernel::TwoArray, None)
+            .unwrap_or_else(|e| panic!("{e}"));
     for _ in 0..steps {
         cpu.step(&comm).expect("CPU run stays stable");
         gpu.step(&comm).expect("GPU run stays stable");
@@ -170,6 +178,7 @@ fn run_on(path: &Path, backend: Backend, precision: Precision) -> grainflow::run
         restart: None,
         backend: Some(backend),
         gpu_storage: None,
+        kernel: None,
     };
     run(&scene, &opts).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -345,6 +354,7 @@ fn fp16_storage_without_gpu_f32_is_refused() {
             restart: None,
             backend: Some(backend),
             gpu_storage: Some(GpuStorage::F16),
+            kernel: None,
         };
         let e = match run(&scene, &opts) {
             Ok(_) => panic!("FP16 storage on {backend:?} {precision:?} was accepted"),

@@ -8,7 +8,7 @@ mod common;
 use common::root;
 use decomposition::SingleProcess;
 use grainflow::lbm::Real;
-use grainflow::run::{Backend, GpuStorage};
+use grainflow::run::{Backend, GpuStorage, Kernel};
 use grainflow::simulation::Simulation;
 
 /// max |a − b| / max |a|.
@@ -52,10 +52,24 @@ fn compare<T: Real>(scheme: &str, steps: usize, tolerance: f64) {
     let path = root().join("tests/scenes/__gpu_coupled.toml");
     let scene = grainflow::scene::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"));
     let comm = SingleProcess;
-    let mut cpu = Simulation::<T>::new(&scene, &comm, Backend::Cpu, GpuStorage::Native, None)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let mut gpu = Simulation::<T>::new(&scene, &comm, Backend::Gpu, GpuStorage::Native, None)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let mut cpu = Simulation::<T>::new(
+        &scene,
+        &comm,
+        Backend::Cpu,
+        GpuStorage::Native,
+        Kernel::TwoArray,
+        None,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mut gpu = Simulation::<T>::new(
+        &scene,
+        &comm,
+        Backend::Gpu,
+        GpuStorage::Native,
+        Kernel::TwoArray,
+        None,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     for _ in 0..steps {
         cpu.step(&comm).expect("CPU run stays stable");
         gpu.step(&comm).expect("GPU run stays stable");

@@ -3,8 +3,93 @@
 //! Zou–He velocity and pressure faces and corners).
 
 use super::d2q9::{rotate, CX, CY, MIRROR_X, MIRROR_Y, OPP, Q, W};
-use super::lattice::{Face, FaceCondition, Lattice, FLUID, MAX_SOLID, OPEN_CORNER, OPEN_WEST};
+use super::lattice::{
+    Face, FaceCondition, Lattice, Layout, FLUID, MAX_SOLID, OPEN_CORNER, OPEN_WEST,
+};
 use super::real::Real;
+
+/// Where a step finds and puts populations in a buffer, for the layout the lattice holds
+/// before the step (see [`Layout`]). `pulled(i, k)`: the value population i of cell k pulls
+/// (the post-collision value of k − c_i in direction i); `own(j, k)`: cell k's own
+/// post-collision value in direction j; `store(j, k)`: where the step writes k's new one
+/// (in the other buffer for two arrays, in the same one in place).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Access {
+    layout: Layout,
+    plane: usize,
+    stride: isize,
+}
+
+impl Access {
+    /// The access of a step taken from `layout`.
+    pub(crate) fn new(layout: Layout, plane: usize, stride: usize) -> Self {
+        Self {
+            layout,
+            plane,
+            stride: stride as isize,
+        }
+    }
+
+    #[inline(always)]
+    fn off(&self, i: usize) -> isize {
+        CX[i] as isize + CY[i] as isize * self.stride
+    }
+
+    /// Index of the population `i` that cell `k` pulls.
+    #[inline(always)]
+    pub(crate) fn pulled(&self, i: usize, k: usize) -> usize {
+        let at = match self.layout {
+            Layout::TwoArray => (i * self.plane) as isize + k as isize - self.off(i),
+            Layout::Local => (OPP[i] * self.plane) as isize + k as isize - self.off(i),
+            Layout::Pushed => (i * self.plane + k) as isize,
+        };
+        at as usize
+    }
+
+    /// Index of cell `k`'s own post-collision value in direction `j`.
+    #[inline(always)]
+    pub(crate) fn own(&self, j: usize, k: usize) -> usize {
+        let at = match self.layout {
+            Layout::TwoArray => (j * self.plane + k) as isize,
+            Layout::Local => (OPP[j] * self.plane + k) as isize,
+            Layout::Pushed => (j * self.plane) as isize + k as isize + self.off(j),
+        };
+        at as usize
+    }
+
+    /// Index where the step stores cell `k`'s new post-collision value in direction `j`.
+    #[inline(always)]
+    pub(crate) fn store(&self, j: usize, k: usize) -> usize {
+        let at = match self.layout {
+            Layout::TwoArray => (j * self.plane + k) as isize,
+            Layout::Local => (j * self.plane) as isize + k as isize + self.off(j),
+            Layout::Pushed => (OPP[j] * self.plane + k) as isize,
+        };
+        at as usize
+    }
+}
+
+/// A buffer read through a raw pointer: an in-place sweep reads slots that other tasks
+/// write (never the same slot in one step), which a shared slice may not see.
+#[derive(Clone, Copy)]
+pub(crate) struct Src<T>(pub(crate) *const T);
+// SAFETY: read-only access to slots no task writes during the pass that reads them.
+unsafe impl<T> Send for Src<T> {}
+unsafe impl<T> Sync for Src<T> {}
+
+impl<T: Copy> Src<T> {
+    /// The reader of a whole buffer.
+    pub(crate) fn of(buf: &[T]) -> Self {
+        Self(buf.as_ptr())
+    }
+    /// The value at `i`.
+    #[inline(always)]
+    pub(crate) fn get(&self, i: usize) -> T {
+        // SAFETY: indices come from `Access` on padded cells of the buffer the pointer
+        // belongs to, which outlives the pass.
+        unsafe { *self.0.add(i) }
+    }
+}
 
 impl<T: Real> Lattice<T> {
     /// Fill the halo of the current buffer from the interior: periodic wrap, specular
@@ -52,19 +137,19 @@ impl<T: Real> Lattice<T> {
         }
     }
 
-    /// Pre-collision shifted populations of fluid cell (x, y) read from `src`, with links
-    /// from solids bounced back (Ladd 1994 moving-wall term) and links from open faces
-    /// reconstructed (Zou & He 1997). Momentum handed to each solid is added to `force`
-    /// (indexed by solid id − 1) when given.
+    /// Pre-collision shifted populations of fluid cell (x, y) read from `src` as `acc`
+    /// says, with links from solids bounced back (Ladd 1994 moving-wall term) and links
+    /// from open faces reconstructed (Zou & He 1997). Momentum handed to each solid is
+    /// added to `force` (indexed by solid id − 1) when given.
     #[inline]
     pub(crate) fn gather_special(
         &self,
-        src: &[T],
+        src: Src<T>,
+        acc: Access,
         x: usize,
         y: usize,
         mut force: Option<&mut [[f64; 2]]>,
     ) -> [T; Q] {
-        let plane = self.plane;
         let k = self.idx(x as isize, y as isize);
         let mut h = [T::default(); Q];
         let mut unknown = false;
@@ -72,11 +157,11 @@ impl<T: Real> Lattice<T> {
             let n = (k as isize - CX[i] as isize - CY[i] as isize * self.stride as isize) as usize;
             let t = self.types[n];
             if t == FLUID {
-                h[i] = src[i * plane + n];
+                h[i] = src.get(acc.pulled(i, k));
             } else if t <= MAX_SOLID {
                 let solid = &self.solids[t as usize - 1];
                 let cu = CX[i] as f64 * solid.velocity[0] + CY[i] as f64 * solid.velocity[1];
-                let back = src[OPP[i] * plane + k];
+                let back = src.get(acc.own(OPP[i], k));
                 // Half-way bounce-back with wall velocity, ρ_w = 1 (Ladd 1994, eq. 3.3).
                 h[i] = back + T::from_f64(6.0 * W[i] * cu);
                 if let Some(f) = force.as_deref_mut() {
@@ -91,7 +176,7 @@ impl<T: Real> Lattice<T> {
             }
         }
         if unknown {
-            self.reconstruct_open(src, x, y, &mut h);
+            self.reconstruct_open(src, acc, x, y, &mut h);
         }
         h
     }
@@ -99,7 +184,7 @@ impl<T: Real> Lattice<T> {
     /// Zou–He reconstruction of the unknown links of a cell on one open face, or on the
     /// corner of two. Works on the shifted populations h = f − w in the kernel's precision:
     /// forming f = h + w in f32 would cost two digits of the small deviations.
-    fn reconstruct_open(&self, src: &[T], x: usize, y: usize, h: &mut [T; Q]) {
+    fn reconstruct_open(&self, src: Src<T>, acc: Access, x: usize, y: usize, h: &mut [T; Q]) {
         let open = |f: Face| self.faces[f as usize].is_open();
         let xf = if x == 0 && open(Face::West) {
             Some(Face::West)
@@ -116,7 +201,7 @@ impl<T: Real> Lattice<T> {
             None
         };
         match (xf, yf) {
-            (Some(a), Some(b)) => self.zou_he_corner(src, x, y, a, b, h),
+            (Some(a), Some(b)) => self.zou_he_corner(src, acc, x, y, a, b, h),
             (Some(face), None) => self.zou_he_face(face, y, h),
             (None, Some(face)) => self.zou_he_face(face, x, h),
             (None, None) => unreachable!("open link without an open face at ({x}, {y})"),
@@ -171,7 +256,17 @@ impl<T: Real> Lattice<T> {
     /// Corner between two open faces (Zou & He 1997, sec. 4; Hecht & Harting 2010, sec. 3.2):
     /// density from the diagonal interior neighbour, the buried pair split to conserve mass.
     /// Shifted populations: the buried pair gets ½(δρ − Σ_known h ± skew).
-    fn zou_he_corner(&self, src: &[T], x: usize, y: usize, xf: Face, yf: Face, h: &mut [T; Q]) {
+    #[allow(clippy::too_many_arguments)]
+    fn zou_he_corner(
+        &self,
+        src: Src<T>,
+        acc: Access,
+        x: usize,
+        y: usize,
+        xf: Face,
+        yf: Face,
+        h: &mut [T; Q],
+    ) {
         let k = match (xf, yf) {
             (Face::West, Face::South) => 0,
             (Face::East, Face::South) => 1,
@@ -193,7 +288,7 @@ impl<T: Real> Lattice<T> {
         let nbr = self.idx(x as isize + CX[dn] as isize, y as isize + CY[dn] as isize);
         let mut drho = zero;
         for i in 0..Q {
-            drho += src[i * self.plane + nbr];
+            drho += src.get(acc.own(i, nbr));
         }
         let rho = c(1.0) + drho;
         let (two_thirds, sixth, half) = (c(2.0 / 3.0), c(6.0), c(0.5));

@@ -71,7 +71,15 @@ impl<T: Real> Lattice<T> {
     /// pulled from the previous buffer with the lattice's own walls, obstacles and open
     /// faces applied (no force bookkeeping: the sweep already recorded it).
     pub fn gather_previous(&self, x: usize, y: usize) -> [T; Q] {
-        self.gather_special(self.previous_buffer(), x, y, None)
+        let acc =
+            super::boundary::Access::new(super::lattice::Layout::TwoArray, self.plane, self.stride);
+        self.gather_special(
+            super::boundary::Src::of(self.previous_buffer()),
+            acc,
+            x,
+            y,
+            None,
+        )
     }
 
     /// Collide one cell's pre-collision populations in place with the lattice's operator

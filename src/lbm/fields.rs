@@ -1,7 +1,7 @@
 //! Macroscopic fields (density, velocity, vorticity) and conserved totals, in lattice units.
 
 use super::collision::moments;
-use super::d2q9::{CX, CY, Q};
+use super::d2q9::Q;
 use super::lattice::Lattice;
 use super::real::Real;
 use rayon::prelude::*;
@@ -82,17 +82,14 @@ impl<T: Real> Lattice<T> {
     /// Pre-collision populations of interior cell (x, y) at the current time, boundary
     /// links reconstructed.
     pub(crate) fn gather(&self, x: usize, y: usize) -> [T; Q] {
-        let src = &self.buf[self.cur];
+        let src = super::boundary::Src::of(&self.buf[self.cur]);
+        let acc = self.access();
         let k = self.idx(x as isize, y as isize);
         let plain = super::lattice::is_plain(&self.types, self.stride, k);
         if plain {
-            std::array::from_fn(|i| {
-                let n =
-                    (k as isize - CX[i] as isize - CY[i] as isize * self.stride as isize) as usize;
-                src[i * self.plane + n]
-            })
+            std::array::from_fn(|i| src.get(acc.pulled(i, k)))
         } else {
-            self.gather_special(src, x, y, None)
+            self.gather_special(src, acc, x, y, None)
         }
     }
 

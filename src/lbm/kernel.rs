@@ -4,7 +4,7 @@ use super::collision::{family, Collider, Collision, MomentCollider};
 use super::d2q9::{CX, CY, Q};
 use super::forces::reduce_forces;
 use super::lanes::Lanes;
-use super::lattice::{FaceCondition, Lattice, StepError, HALO_DIRS};
+use super::lattice::{FaceCondition, Lattice, Layout, StepError, HALO_DIRS};
 use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
 use decomposition::{Comm, Side, SingleProcess};
@@ -74,6 +74,13 @@ impl<T: Real> Lattice<T> {
         comm: &dyn Comm,
         moving: &mut MovingCells<'_>,
     ) -> Result<Option<(usize, f64)>, StepError> {
+        if self.in_place() {
+            assert!(
+                matches!(moving, MovingCells::None),
+                "moving surfaces need the two-array kernel"
+            );
+            return self.stream_collide_in_place(comm).map(|_| None);
+        }
         if self.step == 0 {
             self.fill_halo();
         }
@@ -118,12 +125,18 @@ impl<T: Real> Lattice<T> {
     /// sweep and any field read-out see the boundary values. Exchanged faces are refilled
     /// by the next [`Lattice::stream_collide`] or by [`Lattice::refresh_exchange`].
     pub fn update_boundaries(&mut self) {
-        self.fill_halo();
+        if self.layout != Layout::Pushed {
+            self.fill_halo();
+        }
     }
 
     /// Fill the exchanged x halos of the current buffer now (before reading fields on a
     /// slab). Collective when the slab has neighbours.
     pub fn refresh_exchange(&mut self, comm: &dyn Comm) {
+        if self.layout == Layout::Pushed {
+            // Already brought in by the last step's drain.
+            return;
+        }
         self.pack_halo();
         let mut halo = std::mem::take(&mut self.halo);
         self.halo_wait_s += halo.exchange(comm, &mut || {});
@@ -185,8 +198,9 @@ impl<T: Real> Lattice<T> {
 
     /// Copy the populations that leave each exchanged face (3 of 9, the full padded
     /// column including its y-halo rows, which makes the corners right) into the send buffers.
-    fn pack_halo(&mut self) {
-        let (nx, stride, plane, rows) = (self.nx, self.stride, self.plane, self.ny + 2);
+    pub(crate) fn pack_halo(&mut self) {
+        let (nx, stride, rows) = (self.nx, self.stride, self.ny + 2);
+        let acc = self.access();
         let src = &self.buf[self.cur];
         for (side, xp, dirs) in [(Side::Left, 1, WESTWARD), (Side::Right, nx, EASTWARD)] {
             if self.halo.peer(side).is_none() {
@@ -196,7 +210,7 @@ impl<T: Real> Lattice<T> {
             let mut at = 0;
             for i in dirs {
                 for yp in 0..rows {
-                    src[i * plane + yp * stride + xp].put_le(&mut out[at..]);
+                    src[acc.own(i, yp * stride + xp)].put_le(&mut out[at..]);
                     at += T::BYTES;
                 }
             }
@@ -204,8 +218,9 @@ impl<T: Real> Lattice<T> {
     }
 
     /// Write the received columns into the exchanged x halos of the current buffer.
-    fn unpack_halo(&mut self) {
-        let (nx, stride, plane, rows) = (self.nx, self.stride, self.plane, self.ny + 2);
+    pub(crate) fn unpack_halo(&mut self) {
+        let (nx, stride, rows) = (self.nx, self.stride, self.ny + 2);
+        let acc = self.access();
         let dst = &mut self.buf[self.cur];
         for (side, xp, dirs) in [(Side::Left, 0, EASTWARD), (Side::Right, nx + 1, WESTWARD)] {
             if self.halo.peer(side).is_none() {
@@ -215,7 +230,7 @@ impl<T: Real> Lattice<T> {
             let mut at = 0;
             for i in dirs {
                 for yp in 0..rows {
-                    dst[i * plane + yp * stride + xp] = T::get_le(&data[at..]);
+                    dst[acc.own(i, yp * stride + xp)] = T::get_le(&data[at..]);
                     at += T::BYTES;
                 }
             }
@@ -301,7 +316,13 @@ impl<T: Real> Lattice<T> {
                         std::slice::from_raw_parts_mut(slots.ptr().add((first_slot + j) * ns), ns)
                     };
                     f.fill([0.0; 2]);
-                    let mut h = this.gather_special(src, x as usize, y, Some(f));
+                    let mut h = this.gather_special(
+                        super::boundary::Src::of(src),
+                        super::boundary::Access::new(Layout::TwoArray, this.plane, this.stride),
+                        x as usize,
+                        y,
+                        Some(f),
+                    );
                     let m = c.collide(&mut h);
                     let k = yp * this.stride + x as usize + 1;
                     for (i, hi) in h.iter().enumerate() {
@@ -327,7 +348,11 @@ impl<T: Real> Lattice<T> {
     }
 
     /// The first bad cell over all ranks (rank order), known to every rank. Collective.
-    fn agree_on_instability(&self, comm: &dyn Comm, bad_row: Option<usize>) -> StepError {
+    pub(crate) fn agree_on_instability(
+        &self,
+        comm: &dyn Comm,
+        bad_row: Option<usize>,
+    ) -> StepError {
         let mine = match bad_row.map(|y| self.locate_instability(y)) {
             Some(e) => vec![e.x as f64, e.y as f64, e.density],
             None => Vec::new(),
@@ -341,19 +366,25 @@ impl<T: Real> Lattice<T> {
         }
     }
 
-    /// Find the first bad cell of row `y` in the freshly written buffer.
-    fn locate_instability(&self, y: usize) -> StepError {
-        let dst = &self.buf[self.cur ^ 1];
+    /// Find the first bad cell of row `y` in the freshly written state.
+    pub(crate) fn locate_instability(&self, y: usize) -> StepError {
+        // In place, the layout already says where the new values are; two arrays, they are
+        // in the other buffer, in the cells' own slots.
+        let (dst, acc) = if self.in_place() {
+            (&self.buf[0], self.access())
+        } else {
+            (
+                &self.buf[self.cur ^ 1],
+                super::boundary::Access::new(Layout::TwoArray, self.plane, self.stride),
+            )
+        };
         let mut worst = (0, f64::NAN);
         for x in 0..self.nx {
             if !self.is_fluid(x, y) {
                 continue;
             }
             let k = self.idx(x as isize, y as isize);
-            let rho = 1.0
-                + (0..Q)
-                    .map(|i| dst[i * self.plane + k].to_f64())
-                    .sum::<f64>();
+            let rho = 1.0 + (0..Q).map(|i| dst[acc.own(i, k)].to_f64()).sum::<f64>();
             if !(rho > 0.0) {
                 worst = (x, rho);
                 break;

@@ -134,6 +134,25 @@ pub struct StepError {
     pub density: f64,
 }
 
+/// How a lattice holds its populations between steps.
+///
+/// * `TwoArray`: two buffers; the current one holds each cell's post-collision values in its
+///   own slots (`h_j(x)` at plane j, cell x); a step pulls from it into the other.
+/// * In place (one buffer, the AA pattern of Bailey et al. 2009), alternating:
+///   `Local` holds `h_j(x)` at plane `OPP[j]`, cell x (the next step pulls from the
+///   neighbours and pushes its results to them); `Pushed` holds `h_j(x)` at plane j, cell
+///   x + c_j, already streamed (the next step reads and writes only the cell's own slots).
+///   Each cell reads and writes the same nine slots in a step, so cells never race.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layout {
+    /// Two buffers, post-collision values in place.
+    TwoArray,
+    /// One buffer, post-collision values in the opposite direction's slot.
+    Local,
+    /// One buffer, post-collision values streamed to the neighbours.
+    Pushed,
+}
+
 /// Per-row plan: runs of bulk cells and the special cells between them.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct RowPlan {
@@ -175,6 +194,8 @@ pub struct Lattice<T: Real> {
     pub(crate) halo: SlabHalo,
     /// Seconds spent waiting for halos, accumulated.
     pub(crate) halo_wait_s: f64,
+    /// How the populations are held (two buffers, or one in place).
+    pub(crate) layout: Layout,
 }
 
 /// Populations that cross one x face: 3 of the 9.
@@ -307,6 +328,7 @@ impl<T: Real> Lattice<T> {
             inlet_scale: 1.0,
             halo,
             halo_wait_s: 0.0,
+            layout: Layout::TwoArray,
         }
     }
 
@@ -338,9 +360,9 @@ impl<T: Real> Lattice<T> {
     pub fn steps_done(&self) -> u64 {
         self.step
     }
-    /// Bytes of distribution storage (both buffers, halo included).
+    /// Bytes of distribution storage (both buffers, or the one in place; halo included).
     pub fn storage_bytes(&self) -> usize {
-        2 * Q * self.plane * T::BYTES
+        self.buf.iter().map(|b| b.len()).sum::<usize>() * T::BYTES
     }
     /// Whether interior cell (x, y) is fluid.
     pub fn is_fluid(&self, x: usize, y: usize) -> bool {
@@ -371,11 +393,12 @@ impl<T: Real> Lattice<T> {
     /// the whole fluid state, for checkpoints.
     pub fn export_interior(&self) -> Vec<T> {
         let src = &self.buf[self.cur];
+        let acc = self.access();
         let mut out = Vec::with_capacity(Q * self.ny * self.nx);
         for i in 0..Q {
             for y in 0..self.ny {
-                let k = i * self.plane + self.idx(0, y as isize);
-                out.extend_from_slice(&src[k..k + self.nx]);
+                let k = self.idx(0, y as isize);
+                out.extend((k..k + self.nx).map(|c| src[acc.own(i, c)]));
             }
         }
         out
@@ -386,6 +409,23 @@ impl<T: Real> Lattice<T> {
     /// the next step or [`Lattice::refresh_exchange`].
     pub fn import_interior(&mut self, data: &[T], step: u64) {
         assert_eq!(data.len(), Q * self.ny * self.nx, "checkpoint block size");
+        if self.in_place() {
+            // The local layout: every value in its own cell.
+            self.layout = Layout::Local;
+            let acc = self.access();
+            for i in 0..Q {
+                for y in 0..self.ny {
+                    let k = self.idx(0, y as isize);
+                    let from = (i * self.ny + y) * self.nx;
+                    for x in 0..self.nx {
+                        self.buf[0][acc.own(i, k + x)] = data[from + x];
+                    }
+                }
+            }
+            self.step = step;
+            self.fill_halo();
+            return;
+        }
         for b in 0..2 {
             for i in 0..Q {
                 for y in 0..self.ny {
@@ -409,6 +449,10 @@ impl<T: Real> Lattice<T> {
             ux: u[0],
             uy: u[1],
         });
+        assert!(
+            !self.in_place(),
+            "initial conditions are set before the lattice goes in place"
+        );
         for (i, h) in eq.iter().enumerate() {
             for b in 0..2 {
                 self.buf[b][i * self.plane + k] = T::from_f64(*h);

@@ -16,6 +16,7 @@ mod external;
 pub mod fields;
 mod forces;
 pub mod geometry;
+mod inplace;
 pub mod kernel;
 pub mod lanes;
 pub mod lattice;
@@ -24,5 +25,5 @@ pub mod real;
 
 pub use backend::FluidBackend;
 pub use collision::{Collision, CollisionParams};
-pub use lattice::{Lattice, LatticeSetup, StepError};
+pub use lattice::{Lattice, LatticeSetup, Layout, StepError};
 pub use real::Real;

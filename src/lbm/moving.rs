@@ -271,7 +271,9 @@ fn pull<T: Real>(lat: &Lattice<T>, src: &[T], k: usize) -> [T; Q] {
         })
     } else {
         let (x, y) = (k % lat.stride - 1, k / lat.stride - 1);
-        lat.gather_special(src, x, y, None)
+        let acc =
+            super::boundary::Access::new(super::lattice::Layout::TwoArray, lat.plane, lat.stride);
+        lat.gather_special(super::boundary::Src::of(src), acc, x, y, None)
     }
 }
 

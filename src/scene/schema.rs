@@ -277,6 +277,11 @@ pub struct Run {
     /// "f16" (IEEE half, arithmetic in f32; needs `backend = "gpu"` and `precision = "f32"`).
     #[serde(default)]
     pub gpu_storage: GpuStorage,
+    /// The CPU kernel: "two-array", "in-place" (the AA pattern: half the memory), or
+    /// "auto" (the default: in place where it measured faster, see the README); the CLI's
+    /// `--kernel` overrides.
+    #[serde(default)]
+    pub kernel: Kernel,
     /// Snapshot (HDF5 + PNG) every this many steps; 0 = only at the end.
     #[serde(default)]
     pub output_every: u64,
@@ -333,6 +338,20 @@ pub enum Backend {
     Cpu,
     /// wgpu compute kernels (Vulkan; Mesa lavapipe where there is no GPU).
     Gpu,
+}
+
+/// The CPU kernel's storage scheme.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kernel {
+    /// In place where it measured faster (f32, no grains), two arrays otherwise.
+    #[default]
+    Auto,
+    /// Two buffers, fused pull stream–collide.
+    TwoArray,
+    /// One buffer (the AA pattern): half the memory. Not with grains (their coupling reads
+    /// the previous buffer) nor on the GPU backend.
+    InPlace,
 }
 
 /// Storage of the populations on the GPU.

@@ -39,6 +39,7 @@ fn run_valid(
         restart: None,
         backend: None,
         gpu_storage: None,
+        kernel: None,
     };
     let s = run(scene, &opts).unwrap_or_else(|e| panic!("{e}"));
     (s, out)

@@ -1,0 +1,363 @@
+//! The in-place sweep (the AA pattern, Bailey et al. 2009): one buffer instead of two. Steps
+//! alternate between a *push* step, which pulls each cell's populations from its neighbours'
+//! slots and pushes the results back into them, and a *local* step, which reads and writes
+//! only the cell's own slots (see [`Layout`]). Each cell reads and writes the same nine slots
+//! in a step, so the rayon tasks never race, and no line is written that was not just read
+//! (no write-allocate traffic).
+//!
+//! The collision, the wall and open-face rules are the two-array kernel's, through
+//! [`Access`]; the values a cell pulls are the same, so the results have the same bits (tested
+//! for every boundary on 1–4 ranks). What differs is the halo: before a push step the halos
+//! hold the neighbours' results as the two-array kernel's do (same fills, same exchange);
+//! after it, the results the boundary cells pushed out are brought back in ("drained"): each
+//! halo value the two-array kernel would have pulled is evaluated by the same face rules and
+//! written into the slot of the cell that pulls it, and across rank faces the neighbours
+//! exchange them.
+
+use super::aligned::AlignedBuf;
+use super::boundary::{Access, Src};
+use super::collision::{family, Collider, Collision, MomentCollider};
+use super::d2q9::{CX, CY, MIRROR_X, MIRROR_Y, OPP, Q};
+use super::lanes::Lanes;
+use super::lattice::{Face, FaceCondition, Lattice, Layout, StepError, FLUID, HALO_DIRS};
+use super::real::Real;
+use decomposition::{Comm, Side};
+use rayon::prelude::*;
+
+/// Populations that leave through the west face (c_x = −1) and the east face (c_x = +1).
+const WESTWARD: [usize; HALO_DIRS] = [3, 6, 7];
+const EASTWARD: [usize; HALO_DIRS] = [1, 5, 8];
+
+/// A pointer into the one buffer that row tasks share (each touches only its cells' slots).
+#[derive(Clone, Copy)]
+struct Shared<T>(*mut T);
+// SAFETY: tasks write disjoint slots (see the module docs).
+unsafe impl<T> Send for Shared<T> {}
+unsafe impl<T> Sync for Shared<T> {}
+
+impl<T> Shared<T> {
+    /// The pointer (a method, so closures capture the whole `Send` wrapper).
+    #[inline(always)]
+    fn ptr(&self) -> *mut T {
+        self.0
+    }
+}
+
+impl<T: Real> Lattice<T> {
+    /// The access of the step about to be taken (see [`Access`]).
+    pub(crate) fn access(&self) -> Access {
+        Access::new(self.layout, self.plane, self.stride)
+    }
+
+    /// Whether the populations are held in one buffer (the AA pattern).
+    pub fn in_place(&self) -> bool {
+        self.layout != Layout::TwoArray
+    }
+
+    /// Hold the populations in one buffer from now on: half the memory, and no
+    /// write-allocate traffic. The state is kept (the current buffer's post-collision values
+    /// move to the slots of the opposite direction, halos included). Not for lattices that
+    /// moving surfaces recompute after the sweep (grain coupling reads the previous buffer).
+    pub fn make_in_place(&mut self) {
+        if self.in_place() {
+            return;
+        }
+        let mut b = std::mem::take(&mut self.buf[self.cur]);
+        let plane = self.plane;
+        for j in [1, 2, 5, 6] {
+            let o = OPP[j];
+            let (lo, hi) = b.split_at_mut(o * plane);
+            lo[j * plane..(j + 1) * plane].swap_with_slice(&mut hi[..plane]);
+        }
+        self.buf = [b, AlignedBuf::default()];
+        self.cur = 0;
+        self.layout = Layout::Local;
+    }
+
+    /// One in-place step (see the module docs). Collective when the slab has neighbours.
+    pub(crate) fn stream_collide_in_place(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
+        if self.step == 0 {
+            self.fill_halo();
+        }
+        let push = self.layout == Layout::Local;
+        if push {
+            // The neighbours' results into the halos, as the two-array kernel's, while the
+            // cells that do not read them are swept.
+            self.pack_halo();
+            let mut halo = std::mem::take(&mut self.halo);
+            let waited = halo.exchange(comm, &mut || self.sweep_in_place(true));
+            self.halo = halo;
+            self.halo_wait_s += waited;
+            if self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some() {
+                self.unpack_halo();
+                self.sweep_in_place(false);
+            }
+        } else {
+            self.sweep_in_place(true);
+            self.sweep_in_place(false);
+        }
+        self.layout = if push { Layout::Pushed } else { Layout::Local };
+        let bad_row = self.row_bad.iter().position(|&b| b != 0);
+        if comm.size() > 1 {
+            if comm.any(bad_row.is_some()) {
+                return Err(self.agree_on_instability(comm, bad_row));
+            }
+        } else if let Some(y) = bad_row {
+            return Err(self.locate_instability(y));
+        }
+        if push {
+            self.drain(comm);
+        }
+        self.step += 1;
+        Ok(())
+    }
+
+    /// One parallel pass over the rows: bulk and special cells (`inner`), or the cells next
+    /// to exchanged faces.
+    fn sweep_in_place(&mut self, inner: bool) {
+        let p = self.params;
+        let forced = p.force[0] != T::default() || p.force[1] != T::default();
+        macro_rules! dispatch {
+            ($fam:expr) => {
+                match (self.smagorinsky, forced) {
+                    (false, false) => {
+                        self.sweep_aa(&MomentCollider::<T, false, { $fam }, false>(p), inner)
+                    }
+                    (false, true) => {
+                        self.sweep_aa(&MomentCollider::<T, false, { $fam }, true>(p), inner)
+                    }
+                    (true, false) => {
+                        self.sweep_aa(&MomentCollider::<T, true, { $fam }, false>(p), inner)
+                    }
+                    (true, true) => {
+                        self.sweep_aa(&MomentCollider::<T, true, { $fam }, true>(p), inner)
+                    }
+                }
+            };
+        }
+        match self.collision {
+            Collision::Bgk => dispatch!(family::BGK),
+            Collision::Trt { .. } => dispatch!(family::TRT),
+            Collision::Mrt { .. } => dispatch!(family::MRT),
+        }
+    }
+
+    fn sweep_aa<C: Collider<T>>(&mut self, c: &C, inner: bool) {
+        let acc = self.access();
+        let base = Shared(self.buf[0].as_mut_ptr());
+        let ns = self.forces.solids();
+        let mut slot_values = std::mem::take(&mut self.forces.values);
+        let slots = Shared(slot_values.as_mut_ptr());
+        let mut row_bad = std::mem::take(&mut self.row_bad);
+        let this = &*self;
+        row_bad
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(if inner { 4 } else { 64 })
+            .for_each(|(y, bad)| {
+                let row = &this.plan[y];
+                let mut b = false;
+                let yp = y + 1;
+                let (cells, first_slot) = if inner {
+                    for &(x0, x1) in &row.bulk {
+                        let k0 = yp * this.stride + x0 as usize + 1;
+                        // SAFETY: the run's cells are this task's; each reads and writes only
+                        // its own nine slots.
+                        b |= unsafe {
+                            bulk_run_aa::<T, C, 8>(c, base.ptr(), acc, k0, (x1 - x0) as usize)
+                        };
+                    }
+                    (&row.special, this.forces.row_start[y])
+                } else {
+                    (&row.edge, this.forces.row_start[y] + row.special.len())
+                };
+                for (j, &x) in cells.iter().enumerate() {
+                    // SAFETY: the slots of this row's cells belong to this task only.
+                    let f = unsafe {
+                        std::slice::from_raw_parts_mut(slots.ptr().add((first_slot + j) * ns), ns)
+                    };
+                    f.fill([0.0; 2]);
+                    let src = Src(base.ptr() as *const T);
+                    let mut h = this.gather_special(src, acc, x as usize, y, Some(f));
+                    let m = c.collide(&mut h);
+                    let k = yp * this.stride + x as usize + 1;
+                    for (i, hi) in h.iter().enumerate() {
+                        // SAFETY: the cell's own slots (see the module docs).
+                        unsafe { *base.ptr().add(acc.store(i, k)) = *hi };
+                    }
+                    b |= !(m.rho > T::default());
+                }
+                if inner {
+                    *bad = b as u8;
+                } else {
+                    *bad |= b as u8;
+                }
+            });
+        self.row_bad = row_bad;
+        self.forces.values = slot_values;
+    }
+
+    /// After a push step: every halo value a cell will pull is written into that cell's
+    /// slot (the two-array kernel's halo rules, evaluated on the pushed results), the values
+    /// across rank faces exchanged first. Collective when the slab has neighbours.
+    fn drain(&mut self, comm: &dyn Comm) {
+        let (nx, ny, stride, plane) = (self.nx, self.ny, self.stride, self.plane);
+        let rows = ny + 2;
+        if self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some() {
+            // What each boundary column pushed towards a neighbour, on every padded row.
+            for (side, x, dirs) in [
+                (Side::Left, 0i64, WESTWARD),
+                (Side::Right, nx as i64 - 1, EASTWARD),
+            ] {
+                if self.halo.peer(side).is_none() {
+                    continue;
+                }
+                let values: Vec<T> = dirs
+                    .iter()
+                    .flat_map(|&s| (-1..=ny as i64).map(move |y| (s, y)))
+                    .map(|(s, y)| self.halo_value(x, y, s))
+                    .collect();
+                let out = self.halo.send_mut(side);
+                for (n, v) in values.iter().enumerate() {
+                    v.put_le(&mut out[n * T::BYTES..]);
+                }
+            }
+            let mut halo = std::mem::take(&mut self.halo);
+            self.halo_wait_s += halo.exchange(comm, &mut || {});
+            self.halo = halo;
+            // Into the halo cells' own slots of the inward directions (free in this layout).
+            for (side, xp, dirs) in [(Side::Left, 0, EASTWARD), (Side::Right, nx + 1, WESTWARD)] {
+                if self.halo.peer(side).is_none() {
+                    continue;
+                }
+                let data = self.halo.recv(side);
+                let buf = &mut self.buf[0];
+                let mut at = 0;
+                for s in dirs {
+                    for yp in 0..rows {
+                        buf[s * plane + yp * stride + xp] = T::get_le(&data[at..]);
+                        at += T::BYTES;
+                    }
+                }
+            }
+        }
+        // Every halo cell that a fluid cell pulls from.
+        let mut border: Vec<(i64, i64)> = Vec::with_capacity(2 * (nx + ny) + 4);
+        for y in -1..=ny as i64 {
+            border.push((-1, y));
+            border.push((nx as i64, y));
+        }
+        for x in 0..nx as i64 {
+            border.push((x, -1));
+            border.push((x, ny as i64));
+        }
+        let mut writes: Vec<(usize, T)> = Vec::with_capacity(border.len() * 3);
+        for &(x, y) in &border {
+            let h = self.idx(x as isize, y as isize);
+            if self.types[h] != FLUID {
+                continue;
+            }
+            for i in 1..Q {
+                let (tx, ty) = (x + CX[i] as i64, y + CY[i] as i64);
+                if tx < 0 || ty < 0 || tx >= nx as i64 || ty >= ny as i64 {
+                    continue;
+                }
+                let t = self.idx(tx as isize, ty as isize);
+                if self.types[t] == FLUID {
+                    writes.push((i * plane + t, self.halo_value(x, y, i)));
+                }
+            }
+        }
+        let buf = &mut self.buf[0];
+        for (at, v) in writes {
+            buf[at] = v;
+        }
+    }
+
+    /// The value the two-array kernel's halo cell (x, y) (local, −1 ≤ x ≤ nx, −1 ≤ y ≤ ny)
+    /// would hold in direction `s` before the next step, in the pushed layout: a cell's own
+    /// result, or the face rules applied to one (x faces for the interior rows, y faces over
+    /// the full padded width, as `fill_halo` orders them; exchanged faces from the halo slots
+    /// the neighbour filled).
+    fn halo_value(&self, x: i64, y: i64, s: usize) -> T {
+        let (nx, ny) = (self.nx as i64, self.ny as i64);
+        let buf = &self.buf[0];
+        let inside_x = (0..nx).contains(&x);
+        let inside_y = (0..ny).contains(&y);
+        if inside_x && inside_y {
+            let k = self.idx(x as isize, y as isize);
+            return buf[self.access().own(s, k)];
+        }
+        let x_face = if x < 0 { Face::West } else { Face::East };
+        let exchanged = !inside_x && self.faces[x_face as usize] == FaceCondition::Exchange;
+        if exchanged {
+            // Filled by the neighbour (only the inward directions are ever asked for).
+            return buf[s * self.plane + self.idx(x as isize, y as isize)];
+        }
+        if !inside_y {
+            let (face, wrap, inner) = if y < 0 {
+                (Face::South, ny - 1, 0)
+            } else {
+                (Face::North, 0, ny - 1)
+            };
+            return match self.faces[face as usize] {
+                FaceCondition::Periodic => self.halo_value(x, wrap, s),
+                FaceCondition::FreeSlip => self.halo_value(x, inner, MIRROR_Y[s]),
+                FaceCondition::Outflow => self.halo_value(x, inner, s),
+                _ => T::default(),
+            };
+        }
+        let (wrap, inner) = if x < 0 { (nx - 1, 0) } else { (0, nx - 1) };
+        match self.faces[x_face as usize] {
+            FaceCondition::Periodic => self.halo_value(wrap, y, s),
+            FaceCondition::FreeSlip => self.halo_value(inner, y, MIRROR_X[s]),
+            FaceCondition::Outflow => self.halo_value(inner, y, s),
+            _ => T::default(),
+        }
+    }
+}
+
+/// The bulk cells `[k0, k0 + n)` of one row, in place, `LANES` at a time (scalar for the
+/// remainder). Returns true if any cell's density went NaN or non-positive.
+///
+/// # Safety
+/// `base` is the lattice's one buffer; no other task touches these cells' slots.
+#[inline(always)]
+unsafe fn bulk_run_aa<T: Real, C: Collider<T>, const LANES: usize>(
+    c: &C,
+    base: *mut T,
+    acc: Access,
+    k0: usize,
+    n: usize,
+) -> bool {
+    let ld: [*const T; Q] = std::array::from_fn(|i| base.add(acc.pulled(i, k0)) as *const T);
+    let st: [*mut T; Q] = std::array::from_fn(|j| base.add(acc.store(j, k0)));
+    let zero = T::default();
+    let mut bad = false;
+    let mut k = 0;
+    while k + LANES <= n {
+        let mut h: [Lanes<T, LANES>; Q] = std::array::from_fn(|i| {
+            let mut v = [zero; LANES];
+            std::ptr::copy_nonoverlapping(ld[i].add(k), v.as_mut_ptr(), LANES);
+            Lanes(v)
+        });
+        let m = c.collide(&mut h);
+        for j in 0..Q {
+            std::ptr::copy_nonoverlapping(h[j].0.as_ptr(), st[j].add(k), LANES);
+        }
+        for r in m.rho.0 {
+            bad |= !(r > zero);
+        }
+        k += LANES;
+    }
+    while k < n {
+        let mut h: [T; Q] = std::array::from_fn(|i| *ld[i].add(k));
+        let m = c.collide(&mut h);
+        for j in 0..Q {
+            *st[j].add(k) = h[j];
+        }
+        bad |= !(m.rho > zero);
+        k += 1;
+    }
+    bad
+}
