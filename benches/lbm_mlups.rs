@@ -1,4 +1,4 @@
-//! MLUPS of the fused stream–collide on a 1024 × 1024 periodic box: BGK and MRT (plus TRT),
+//! MLUPS of the fused stream–collide on a 1024 × 1024 periodic box (`GRAINFLOW_BENCH_N`): BGK and MRT (plus TRT),
 //! f32 and f64, on 1 and 2 threads, with the two-array kernel and in place (the AA pattern;
 //! its push and local steps alternate, so a sample averages both). Criterion times one step;
 //! MLUPS = cells / time. Bytes per update: the two-array kernel moves 2 × 9 × sizeof(T) plus,
@@ -9,11 +9,19 @@ use common::periodic_box;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use grainflow::lbm::{Collision, Real};
 
-const N: usize = 1024;
+/// Box edge: 1024, or `GRAINFLOW_BENCH_N` (e.g. 128 for a box that fits in cache, which
+/// shows the compute ceiling).
+fn edge() -> usize {
+    std::env::var("GRAINFLOW_BENCH_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1024)
+}
 
 fn bench_one<T: Real>(c: &mut Criterion, name: &str, collision: Collision) {
-    let mut group = c.benchmark_group("lbm_1024x1024_periodic");
-    group.throughput(Throughput::Elements((N * N) as u64));
+    let n = edge();
+    let mut group = c.benchmark_group(format!("lbm_{n}x{n}_periodic"));
+    group.throughput(Throughput::Elements((n * n) as u64));
     group.sample_size(20);
     for threads in [1usize, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -21,7 +29,7 @@ fn bench_one<T: Real>(c: &mut Criterion, name: &str, collision: Collision) {
             .build()
             .unwrap();
         for in_place in [false, true] {
-            let mut lat = periodic_box::<T>(N, N, collision);
+            let mut lat = periodic_box::<T>(n, n, collision);
             let kernel = if in_place {
                 lat.make_in_place();
                 "in-place"

@@ -16,13 +16,13 @@ use decomposition::{Comm, Side, SlabHalo, SlabPartition};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Whether the CPU lattice runs in place: asked for, or `auto` where it measured faster
-/// (f32, `value_bytes` = 4), never with grains.
-pub fn in_place(kernel: Kernel, value_bytes: usize, grains: bool) -> bool {
+/// Whether the CPU lattice runs in place: asked for, or `auto` (it measured faster in f32
+/// and f64 alike), never with grains.
+pub fn in_place(kernel: Kernel, grains: bool) -> bool {
     match kernel {
         Kernel::InPlace => !grains,
         Kernel::TwoArray => false,
-        Kernel::Auto => !grains && value_bytes == 4,
+        Kernel::Auto => !grains,
     }
 }
 
@@ -227,7 +227,7 @@ impl<T: Real> Simulation<T> {
             }
         }
         lattice.update_boundaries();
-        if backend == Backend::Cpu && in_place(kernel, T::BYTES, scene.scene.grains.is_some()) {
+        if backend == Backend::Cpu && in_place(kernel, scene.scene.grains.is_some()) {
             lattice.make_in_place();
         } else if kernel == Kernel::InPlace {
             return Err(invalid(

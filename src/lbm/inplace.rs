@@ -27,6 +27,18 @@ use rayon::prelude::*;
 /// Populations that leave through the west face (c_x = −1) and the east face (c_x = +1).
 const WESTWARD: [usize; HALO_DIRS] = [3, 6, 7];
 const EASTWARD: [usize; HALO_DIRS] = [1, 5, 8];
+/// "No slot": the halo value is zero (faces whose halo the two-array kernel leaves empty).
+const NONE: usize = usize::MAX;
+
+/// What [`Lattice::drain`] copies after every push step: the indices are fixed by the
+/// geometry, so they are found once (the first drain) and the step only gathers.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct DrainPlan {
+    /// Per x side (left, right): the slot each value sent to that neighbour comes from.
+    send: [Vec<usize>; 2],
+    /// (slot a fluid cell pulls, slot its value comes from).
+    fill: Vec<(usize, usize)>,
+}
 
 /// A pointer into the one buffer that row tasks share (each touches only its cells' slots).
 #[derive(Clone, Copy)]
@@ -201,31 +213,30 @@ impl<T: Real> Lattice<T> {
     /// slot (the two-array kernel's halo rules, evaluated on the pushed results), the values
     /// across rank faces exchanged first. Collective when the slab has neighbours.
     fn drain(&mut self, comm: &dyn Comm) {
-        let (nx, ny, stride, plane) = (self.nx, self.ny, self.stride, self.plane);
+        if self.drain_plan.is_none() {
+            self.drain_plan = Some(self.build_drain_plan());
+        }
+        let plan = self.drain_plan.take().expect("built above");
+        let (ny, stride, plane) = (self.ny, self.stride, self.plane);
         let rows = ny + 2;
+        let value = |buf: &[T], src: usize| if src == NONE { T::default() } else { buf[src] };
         if self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some() {
             // What each boundary column pushed towards a neighbour, on every padded row.
-            for (side, x, dirs) in [
-                (Side::Left, 0i64, WESTWARD),
-                (Side::Right, nx as i64 - 1, EASTWARD),
-            ] {
+            for (n, side) in [Side::Left, Side::Right].into_iter().enumerate() {
                 if self.halo.peer(side).is_none() {
                     continue;
                 }
-                let values: Vec<T> = dirs
-                    .iter()
-                    .flat_map(|&s| (-1..=ny as i64).map(move |y| (s, y)))
-                    .map(|(s, y)| self.halo_value(x, y, s))
-                    .collect();
+                let buf = &self.buf[0];
                 let out = self.halo.send_mut(side);
-                for (n, v) in values.iter().enumerate() {
-                    v.put_le(&mut out[n * T::BYTES..]);
+                for (m, &src) in plan.send[n].iter().enumerate() {
+                    value(buf, src).put_le(&mut out[m * T::BYTES..]);
                 }
             }
             let mut halo = std::mem::take(&mut self.halo);
             self.halo_wait_s += halo.exchange(comm, &mut || {});
             self.halo = halo;
             // Into the halo cells' own slots of the inward directions (free in this layout).
+            let nx = self.nx;
             for (side, xp, dirs) in [(Side::Left, 0, EASTWARD), (Side::Right, nx + 1, WESTWARD)] {
                 if self.halo.peer(side).is_none() {
                     continue;
@@ -241,7 +252,26 @@ impl<T: Real> Lattice<T> {
                 }
             }
         }
-        // Every halo cell that a fluid cell pulls from.
+        // Every slot a fluid cell pulls from a halo cell. Sources and targets never overlap
+        // (checked when the plan is built), so the copy needs no staging.
+        let buf = &mut self.buf[0];
+        for &(dst, src) in &plan.fill {
+            buf[dst] = value(buf, src);
+        }
+        self.drain_plan = Some(plan);
+    }
+
+    /// The index lists of [`Lattice::drain`], from the faces and cell types (fixed for the
+    /// lattice's life). Built in the pushed layout.
+    fn build_drain_plan(&self) -> DrainPlan {
+        debug_assert_eq!(self.layout, Layout::Pushed);
+        let (nx, ny) = (self.nx, self.ny);
+        let send = [(0i64, WESTWARD), (nx as i64 - 1, EASTWARD)].map(|(x, dirs)| {
+            dirs.iter()
+                .flat_map(|&s| (-1..=ny as i64).map(move |y| (s, y)))
+                .map(|(s, y)| self.halo_index(x, y, s))
+                .collect()
+        });
         let mut border: Vec<(i64, i64)> = Vec::with_capacity(2 * (nx + ny) + 4);
         for y in -1..=ny as i64 {
             border.push((-1, y));
@@ -251,7 +281,7 @@ impl<T: Real> Lattice<T> {
             border.push((x, -1));
             border.push((x, ny as i64));
         }
-        let mut writes: Vec<(usize, T)> = Vec::with_capacity(border.len() * 3);
+        let mut fill = Vec::with_capacity(border.len() * 3);
         for &(x, y) in &border {
             let h = self.idx(x as isize, y as isize);
             if self.types[h] != FLUID {
@@ -264,35 +294,36 @@ impl<T: Real> Lattice<T> {
                 }
                 let t = self.idx(tx as isize, ty as isize);
                 if self.types[t] == FLUID {
-                    writes.push((i * plane + t, self.halo_value(x, y, i)));
+                    fill.push((i * self.plane + t, self.halo_index(x, y, i)));
                 }
             }
         }
-        let buf = &mut self.buf[0];
-        for (at, v) in writes {
-            buf[at] = v;
-        }
+        let targets: std::collections::HashSet<usize> = fill.iter().map(|f| f.0).collect();
+        assert!(
+            fill.iter().all(|f| !targets.contains(&f.1)),
+            "in-place halo plan reads a slot it writes"
+        );
+        DrainPlan { send, fill }
     }
 
-    /// The value the two-array kernel's halo cell (x, y) (local, −1 ≤ x ≤ nx, −1 ≤ y ≤ ny)
-    /// would hold in direction `s` before the next step, in the pushed layout: a cell's own
+    /// Where the value is that the two-array kernel's halo cell (x, y) (local, −1 ≤ x ≤ nx, −1 ≤ y ≤ ny)
+    /// would hold in direction `s` before the next step, in the pushed layout ([`NONE`]: zero): a cell's own
     /// result, or the face rules applied to one (x faces for the interior rows, y faces over
     /// the full padded width, as `fill_halo` orders them; exchanged faces from the halo slots
     /// the neighbour filled).
-    fn halo_value(&self, x: i64, y: i64, s: usize) -> T {
+    fn halo_index(&self, x: i64, y: i64, s: usize) -> usize {
         let (nx, ny) = (self.nx as i64, self.ny as i64);
-        let buf = &self.buf[0];
         let inside_x = (0..nx).contains(&x);
         let inside_y = (0..ny).contains(&y);
         if inside_x && inside_y {
             let k = self.idx(x as isize, y as isize);
-            return buf[self.access().own(s, k)];
+            return self.access().own(s, k);
         }
         let x_face = if x < 0 { Face::West } else { Face::East };
         let exchanged = !inside_x && self.faces[x_face as usize] == FaceCondition::Exchange;
         if exchanged {
             // Filled by the neighbour (only the inward directions are ever asked for).
-            return buf[s * self.plane + self.idx(x as isize, y as isize)];
+            return s * self.plane + self.idx(x as isize, y as isize);
         }
         if !inside_y {
             let (face, wrap, inner) = if y < 0 {
@@ -301,18 +332,18 @@ impl<T: Real> Lattice<T> {
                 (Face::North, 0, ny - 1)
             };
             return match self.faces[face as usize] {
-                FaceCondition::Periodic => self.halo_value(x, wrap, s),
-                FaceCondition::FreeSlip => self.halo_value(x, inner, MIRROR_Y[s]),
-                FaceCondition::Outflow => self.halo_value(x, inner, s),
-                _ => T::default(),
+                FaceCondition::Periodic => self.halo_index(x, wrap, s),
+                FaceCondition::FreeSlip => self.halo_index(x, inner, MIRROR_Y[s]),
+                FaceCondition::Outflow => self.halo_index(x, inner, s),
+                _ => NONE,
             };
         }
         let (wrap, inner) = if x < 0 { (nx - 1, 0) } else { (0, nx - 1) };
         match self.faces[x_face as usize] {
-            FaceCondition::Periodic => self.halo_value(wrap, y, s),
-            FaceCondition::FreeSlip => self.halo_value(inner, y, MIRROR_X[s]),
-            FaceCondition::Outflow => self.halo_value(inner, y, s),
-            _ => T::default(),
+            FaceCondition::Periodic => self.halo_index(wrap, y, s),
+            FaceCondition::FreeSlip => self.halo_index(inner, y, MIRROR_X[s]),
+            FaceCondition::Outflow => self.halo_index(inner, y, s),
+            _ => NONE,
         }
     }
 }
@@ -331,7 +362,10 @@ unsafe fn bulk_run_aa<T: Real, C: Collider<T>, const LANES: usize>(
     n: usize,
 ) -> bool {
     let ld: [*const T; Q] = std::array::from_fn(|i| base.add(acc.pulled(i, k0)) as *const T);
-    let st: [*mut T; Q] = std::array::from_fn(|j| base.add(acc.store(j, k0)));
+    // In place, cell k stores direction j where it pulled direction opp(j) (both layouts):
+    // nine addresses, not eighteen, so the pointers stay in registers.
+    debug_assert!((0..Q).all(|j| acc.store(j, k0) == acc.pulled(OPP[j], k0)));
+    let st: [*mut T; Q] = std::array::from_fn(|j| ld[OPP[j]] as *mut T);
     let zero = T::default();
     let mut bad = false;
     let mut k = 0;

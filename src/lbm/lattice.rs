@@ -196,6 +196,8 @@ pub struct Lattice<T: Real> {
     pub(crate) halo_wait_s: f64,
     /// How the populations are held (two buffers, or one in place).
     pub(crate) layout: Layout,
+    /// The in-place kernel's halo gather, built at its first use.
+    pub(crate) drain_plan: Option<super::inplace::DrainPlan>,
 }
 
 /// Populations that cross one x face: 3 of the 9.
@@ -329,6 +331,7 @@ impl<T: Real> Lattice<T> {
             halo,
             halo_wait_s: 0.0,
             layout: Layout::TwoArray,
+            drain_plan: None,
         }
     }
 

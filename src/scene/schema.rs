@@ -344,7 +344,8 @@ pub enum Backend {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Kernel {
-    /// In place where it measured faster (f32, no grains), two arrays otherwise.
+    /// In place where it measured faster (every fluid-only CPU run, f32 and f64), two arrays
+    /// with grains.
     #[default]
     Auto,
     /// Two buffers, fused pull stream–collide.
