@@ -6,8 +6,8 @@ For each aspect ratio a in {0.5, 1, 2} and each packing (loose, dense) this writ
   dry-a<A>-<packing>.toml  the same grains, settled the same way, collapsing in air (DEM).
 The grains are those of the dry DEM study (jobs/column-collapse): disks d = 0.92-1.38 mm,
 rho = 2500 kg/m3, friction 0.53, restitution 0.75, rolling resistance 0.3, walls tan 24.8 deg.
-Loose: settled with the grains' own friction (2-D solid fraction about 0.80).
-Dense: settled without friction (about 0.84), then run with the same friction.
+Loose: settled with the grains' own friction (2-D solid fraction 0.77 as measured in the runs).
+Dense: settled without friction (0.81-0.82 as measured), then run with the same friction.
 
 Usage: make-scenes.py [--out DIR] [--spacing M] [--viscosity M2_S]
 """
