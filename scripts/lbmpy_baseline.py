@@ -8,8 +8,10 @@ compare in one sitting).
     pip install lbmpy==2.0
     OMP_NUM_THREADS=1 python3 scripts/lbmpy_baseline.py f64 [srt|mrt] [pull|aa]
     OMP_NUM_THREADS=2 python3 scripts/lbmpy_baseline.py f32 srt aa
+    GRAINFLOW_BENCH_N=4096 ...   another box edge (the same variable sets the bench's box)
 Prints the median MLUPS of 3 timed blocks (halo copies excluded, as in lbmpy's own figures).
 """
+import os
 import sys
 import time
 
@@ -23,7 +25,7 @@ precision = sys.argv[1] if len(sys.argv) > 1 else "f64"
 method = sys.argv[2] if len(sys.argv) > 2 else "srt"
 pattern = sys.argv[3] if len(sys.argv) > 3 else "pull"
 dtype = {"f64": "float64", "f32": "float32"}[precision]
-n, q = 1024, 9
+n, q = int(os.environ.get("GRAINFLOW_BENCH_N", "1024")), 9  # the bench's box edge
 src, dst = ps.fields(f"src({q}), dst({q}): {dtype}[2D]", layout="fzyx")
 
 
@@ -75,7 +77,7 @@ for _ in range(6):
     advance()
 samples = []
 for _ in range(3):
-    steps = 50
+    steps = max(4, 2 * (25 * 1024 * 1024 // (n * n)))  # even: AA alternates
     t = time.perf_counter()
     for _ in range(steps):
         advance()
