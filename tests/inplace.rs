@@ -1,7 +1,7 @@
 //! The in-place CPU kernel (AA pattern) against the two-array kernel: the same scenes give
 //! bit-identical fields (f64), probes, forces and totals at every snapshot, odd and even
 //! steps alike, on 1–4 ranks, for every boundary the fluid core has (Zou–He velocity and
-//! pressure faces and their corners, walls, moving walls, free slip, outflow, periodic faces
+//! pressure faces and the corners between two of them, walls, moving walls, free slip, outflow, periodic faces
 //! and the periodic seam across ranks, obstacles, body force, BGK/TRT/MRT, Smagorinsky); a
 //! checkpoint written by one kernel continues bit-identically in the other; in-place storage
 //! is half the two-array storage.
@@ -34,6 +34,7 @@ fn in_place_is_bit_identical_to_two_arrays_on_1_to_4_ranks() {
         "tests/scenes/mpi_channel.toml",
         "tests/scenes/mpi_periodic.toml",
         "tests/scenes/mpi_faces.toml",
+        "tests/scenes/mpi_corners.toml",
     ] {
         let scene = every_7(scene, d.path());
         let two = d.path().join("two-array");

@@ -283,13 +283,12 @@ impl<T: Real> Lattice<T> {
         let (a, b) = (r(1), r(2));
         let ua = c(CX[a] as f64) * u[0] + c(CY[a] as f64) * u[1];
         let ub = c(CX[b] as f64) * u[0] + c(CY[b] as f64) * u[1];
-        // Density of the interior neighbour along the inward diagonal (extrapolation).
-        let dn = r(5);
-        let nbr = self.idx(x as isize + CX[dn] as isize, y as isize + CY[dn] as isize);
-        let mut drho = zero;
-        for i in 0..Q {
-            drho += src.get(acc.own(i, nbr));
-        }
+        // Density of the interior neighbour along the inward diagonal (extrapolation), from
+        // the step's start: in place, taken before the sweep overwrote the neighbour's slots.
+        let drho = match &self.corner_drho {
+            Some(d) => d[k],
+            None => self.corner_neighbour_drho(src, acc, x, y, k),
+        };
         let rho = c(1.0) + drho;
         let (two_thirds, sixth, half) = (c(2.0 / 3.0), c(6.0), c(0.5));
         h[a] = h[r(3)] + two_thirds * rho * ua;
@@ -299,6 +298,50 @@ impl<T: Real> Lattice<T> {
         let skew = rho * (ub - ua) / sixth;
         h[r(6)] = half * (drho - known + skew);
         h[r(8)] = half * (drho - known - skew);
+    }
+}
+
+impl<T: Real> Lattice<T> {
+    /// δρ = Σ_i h_i of the interior neighbour on the inward diagonal of corner `k` (0 W–S,
+    /// 1 E–S, 2 E–N, 3 W–N) at cell (x, y): its post-collision values of the last step.
+    pub(crate) fn corner_neighbour_drho(
+        &self,
+        src: Src<T>,
+        acc: Access,
+        x: usize,
+        y: usize,
+        k: usize,
+    ) -> T {
+        let dn = rotate(5, k);
+        let nbr = self.idx(x as isize + CX[dn] as isize, y as isize + CY[dn] as isize);
+        let mut drho = T::default();
+        for i in 0..Q {
+            drho += src.get(acc.own(i, nbr));
+        }
+        drho
+    }
+
+    /// The δρ of every open corner's neighbour (zero where there is no open corner), for the
+    /// in-place sweeps, which overwrite the neighbour's slots while the corner still needs them.
+    pub(crate) fn corner_drhos(&self, acc: Access) -> [T; 4] {
+        let open = |f: Face| self.faces[f as usize].is_open();
+        let (nx, ny) = (self.nx, self.ny);
+        let src = Src(self.buf[self.cur].as_ptr());
+        let mut out = [T::default(); 4];
+        for (k, (xf, yf, x, y)) in [
+            (Face::West, Face::South, 0, 0),
+            (Face::East, Face::South, nx - 1, 0),
+            (Face::East, Face::North, nx - 1, ny - 1),
+            (Face::West, Face::North, 0, ny - 1),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if open(xf) && open(yf) && nx > 1 && ny > 1 {
+                out[k] = self.corner_neighbour_drho(src, acc, x, y, k);
+            }
+        }
+        out
     }
 }
 

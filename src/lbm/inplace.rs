@@ -92,6 +92,9 @@ impl<T: Real> Lattice<T> {
             self.fill_halo();
         }
         let push = self.layout == Layout::Local;
+        // Open corners read their diagonal neighbour's values of the step's start, which the
+        // sweep overwrites in place: taken first (the two-array kernel reads them untouched).
+        self.corner_drho = Some(self.corner_drhos(self.access()));
         if push {
             // The neighbours' results into the halos, as the two-array kernel's, while the
             // cells that do not read them are swept.
@@ -108,6 +111,7 @@ impl<T: Real> Lattice<T> {
             self.sweep_in_place(true);
             self.sweep_in_place(false);
         }
+        self.corner_drho = None;
         self.layout = if push { Layout::Pushed } else { Layout::Local };
         let bad_row = self.row_bad.iter().position(|&b| b != 0);
         if comm.size() > 1 {

@@ -198,6 +198,10 @@ pub struct Lattice<T: Real> {
     pub(crate) layout: Layout,
     /// The in-place kernel's halo gather, built at its first use.
     pub(crate) drain_plan: Option<super::inplace::DrainPlan>,
+    /// During an in-place sweep: δρ of each open corner's diagonal neighbour from the step's
+    /// start (W–S, E–S, E–N, W–N), read before the sweep overwrites its slots. None otherwise
+    /// (the two-array kernel reads the untouched source buffer).
+    pub(crate) corner_drho: Option<[T; 4]>,
 }
 
 /// Populations that cross one x face: 3 of the 9.
@@ -332,6 +336,7 @@ impl<T: Real> Lattice<T> {
             halo_wait_s: 0.0,
             layout: Layout::TwoArray,
             drain_plan: None,
+            corner_drho: None,
         }
     }
 
