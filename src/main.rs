@@ -465,11 +465,17 @@ fn print_check(s: &scene::ValidScene) {
     println!("  Reynolds number  {:.4}", u.reynolds);
     println!("  steps            {}", step_count(s, None));
     let cells = ((nx + 2) * (ny + 2)) as f64;
-    let bytes = |b: f64| 2.0 * 9.0 * cells * b + cells * 2.0;
+    // The in-place kernel (the CPU default without grains) holds one distribution buffer.
+    let one = s.scene.run.backend == grainflow::scene::Backend::Cpu
+        && grainflow::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
+    let buffers = if one { 1.0 } else { 2.0 };
+    let bytes = |b: f64| buffers * 9.0 * cells * b + cells * 2.0;
     println!(
-        "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 (two distribution buffers + cell types)",
+        "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 ({} distribution buffer{} + cell types)",
         bytes(8.0) / 1048576.0,
-        bytes(4.0) / 1048576.0
+        bytes(4.0) / 1048576.0,
+        buffers,
+        if one { ", in place" } else { "s" }
     );
     match grainflow::coupling::plan(s) {
         Ok(Some(p)) => {

@@ -17,7 +17,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Whether the CPU lattice runs in place: asked for, or `auto` (it measured faster in f32
-/// and f64 alike), never with grains.
+/// and f64 alike), never with grains (asking for `in-place` with grains is refused in
+/// [`Simulation::new`]).
 pub fn in_place(kernel: Kernel, grains: bool) -> bool {
     match kernel {
         Kernel::InPlace => !grains,
