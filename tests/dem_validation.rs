@@ -21,54 +21,99 @@ fn model(e: f64, mu: f64) -> ContactModel {
     }
 }
 
+/// Two equal disks `gap` apart meet head-on at ±0.1 m/s with restitution `e`, time step
+/// λ Δt_cr. Returns (rebound ratio, contact duration × ω_d / π, DEM steps in contact).
+fn binary_collision(e: f64, lambda: f64, gap: f64) -> (f64, f64, usize) {
+    let mut g = Grains::default();
+    g.push([0.0, 0.0], R, RHO, false);
+    g.push([2.0 * R + gap, 0.0], R, RHO, false);
+    let v = 0.1;
+    g.vx[0] = v;
+    g.vx[1] = -v;
+    let m = model(e, 0.0);
+    let dt = stable_time_step(&g, &m, lambda);
+    let mut s = DemSystem::new(g, vec![], m, [0.0, 0.0], dt, lambda, false).unwrap();
+    let overlap = |s: &DemSystem| 2.0 * R - (s.grains.x[1] - s.grains.x[0]);
+    let (mut start, mut end) = (None, None);
+    let mut prev = (s.time, overlap(&s));
+    let mut steps_in_contact = 0;
+    while end.is_none() && s.time < 1.0 {
+        s.step();
+        let now = (s.time, overlap(&s));
+        if now.1 > 0.0 {
+            steps_in_contact += 1;
+        }
+        // Linear interpolation of the zero crossings of the overlap.
+        let cross = prev.0 + (now.0 - prev.0) * prev.1 / (prev.1 - now.1);
+        if prev.1 <= 0.0 && now.1 > 0.0 {
+            start = Some(cross);
+        } else if prev.1 > 0.0 && now.1 <= 0.0 {
+            end = Some(cross);
+        }
+        prev = now;
+    }
+    let rebound = (s.grains.vx[1] - s.grains.vx[0]) / (2.0 * v);
+    let m_eff = 0.5 * s.grains.m[0];
+    let zeta = m.damping_ratio();
+    let omega_d = (m.kn / m_eff).sqrt() * (1.0 - zeta * zeta).sqrt();
+    let duration = end.unwrap() - start.unwrap();
+    // Momentum is conserved exactly (equal and opposite pair forces).
+    assert!(s.grains.momentum()[0].abs() < 1e-18);
+    (rebound, duration * omega_d / PI, steps_in_contact)
+}
+
 /// Two equal disks meet head-on at ±v. The rebound speed ratio is e within 1 %, and the
 /// contact lasts π/ω_d (ω_d = ω_n √(1 − ζ²), ω_n = √(k_n/m*)) within 1 %.
 #[test]
 fn binary_collision_restitution_and_duration() {
     for e in [0.3, 0.7, 0.95] {
-        let mut g = Grains::default();
-        g.push([0.0, 0.0], R, RHO, false);
-        g.push([2.0 * R + 1e-5, 0.0], R, RHO, false);
-        let v = 0.1;
-        g.vx[0] = v;
-        g.vx[1] = -v;
-        let m = model(e, 0.0);
         // λ = 0.002: about 1500 steps per contact, so the dashpot's jump at the first and
         // last step of the contact (an O(Δt) error) stays well below 1 %.
-        let dt = stable_time_step(&g, &m, 0.002);
-        let mut s = DemSystem::new(g, vec![], m, [0.0, 0.0], dt, 0.01, false).unwrap();
-        let overlap = |s: &DemSystem| 2.0 * R - (s.grains.x[1] - s.grains.x[0]);
-        let (mut start, mut end) = (None, None);
-        let mut prev = (s.time, overlap(&s));
-        while end.is_none() && s.time < 1.0 {
-            s.step();
-            let now = (s.time, overlap(&s));
-            // Linear interpolation of the zero crossings of the overlap.
-            let cross = prev.0 + (now.0 - prev.0) * prev.1 / (prev.1 - now.1);
-            if prev.1 <= 0.0 && now.1 > 0.0 {
-                start = Some(cross);
-            } else if prev.1 > 0.0 && now.1 <= 0.0 {
-                end = Some(cross);
-            }
-            prev = now;
-        }
-        let rebound = (s.grains.vx[1] - s.grains.vx[0]) / (2.0 * v);
-        let m_eff = 0.5 * s.grains.m[0];
-        let zeta = m.damping_ratio();
-        let omega_d = (m.kn / m_eff).sqrt() * (1.0 - zeta * zeta).sqrt();
-        let duration = end.unwrap() - start.unwrap();
-        eprintln!(
-            "e = {e}: rebound ratio {rebound:.5}, duration {duration:.4e} s vs π/ω_d = {:.4e} s",
-            PI / omega_d
-        );
+        let (rebound, duration, _) = binary_collision(e, 0.002, 1e-5);
+        eprintln!("e = {e}: rebound ratio {rebound:.5}, duration {duration:.4} π/ω_d");
         assert!((rebound - e).abs() <= 0.01 * e, "e = {e}: got {rebound}");
-        assert!(
-            (duration * omega_d / PI - 1.0).abs() <= 0.01,
-            "duration {duration}"
-        );
-        // Momentum is conserved exactly (equal and opposite pair forces).
-        assert!(s.grains.momentum()[0].abs() < 1e-18);
+        assert!((duration - 1.0).abs() <= 0.01, "duration {duration}");
     }
+}
+
+/// The speed–accuracy trade of the time-step factor λ (issue 18): the restitution error of a
+/// binary collision against λ, whose cost is 1/λ steps. Where the contact starts within a
+/// step changes the error (the dashpot switches on and off between steps), so each λ takes the
+/// worst of 16 start phases. That worst error is first order in Δt: it must fall at every
+/// halving of λ, by at least 4× from λ = 0.2 to λ = 0.025, and the seed's λ = 0.1 must keep
+/// e = 0.75 within 10 %.
+/// `cargo test --release --test dem_validation restitution -- --nocapture` prints the table.
+#[test]
+fn restitution_error_against_the_time_step_factor() {
+    let e = 0.75;
+    let mut worst = Vec::new();
+    for lambda in [0.025, 0.05, 0.1, 0.2, 0.4] {
+        // One step's approach at 0.2 m/s, split into 16 phases.
+        let mut g = Grains::default();
+        g.push([0.0, 0.0], R, RHO, false);
+        let dt = stable_time_step(&g, &model(e, 0.0), lambda);
+        let (mut err_max, mut steps) = (0.0f64, 0);
+        for k in 0..16 {
+            let gap = 1e-5 + 0.2 * dt * k as f64 / 16.0;
+            let (rebound, _, n) = binary_collision(e, lambda, gap);
+            err_max = err_max.max((rebound - e).abs() / e);
+            steps = n;
+        }
+        eprintln!(
+            "λ = {lambda:5}: about {steps:3} steps in contact, worst restitution error over 16 phases {:.2} %",
+            100.0 * err_max
+        );
+        worst.push((lambda, err_max));
+    }
+    for w in worst.windows(2) {
+        assert!(
+            w[0].1 < w[1].1,
+            "the worst error must grow with λ: {worst:?}"
+        );
+    }
+    let at = |l: f64| worst.iter().find(|(x, _)| *x == l).unwrap().1;
+    assert!(at(0.1) <= 0.10, "λ = 0.1: worst error {}", at(0.1));
+    assert!(at(0.025) * 4.0 <= at(0.2), "{worst:?}");
 }
 
 /// A grain resting on a floor under gravity tilted by `angle`; returns the acceleration
