@@ -221,17 +221,23 @@ impl<T: Real, const SMAG: bool, const FAMILY: u8, const FORCED: bool> Collider<T
         let c = |v: f64| V::splat(T::from_f64(v));
         let sp = V::splat;
         // Moments of the shifted populations (Lallemand & Luo 2000, eq. 11 basis).
-        let s1 = h[1] + h[2] + h[3] + h[4];
-        let s2 = h[5] + h[6] + h[7] + h[8];
+        // Shared sums and differences first: fewer operations, same moments.
+        let (p13, p24) = (h[1] + h[3], h[2] + h[4]);
+        let (d13, d24) = (h[1] - h[3], h[2] - h[4]);
+        let (p57, p68) = (h[5] + h[7], h[6] + h[8]);
+        let (d57, d86) = (h[5] - h[7], h[8] - h[6]);
+        let s1 = p13 + p24;
+        let s2 = p57 + p68;
         let drho = h[0] + s1 + s2;
-        let e = c(-4.0) * h[0] - s1 + c(2.0) * s2;
-        let eps = c(4.0) * h[0] - c(2.0) * s1 + s2;
-        let jx = h[1] - h[3] + h[5] - h[6] - h[7] + h[8];
-        let jy = h[2] - h[4] + h[5] + h[6] - h[7] - h[8];
-        let qx = c(-2.0) * (h[1] - h[3]) + h[5] - h[6] - h[7] + h[8];
-        let qy = c(-2.0) * (h[2] - h[4]) + h[5] + h[6] - h[7] - h[8];
-        let pxx = h[1] - h[2] + h[3] - h[4];
-        let pxy = h[5] - h[6] + h[7] - h[8];
+        let e = h[0].mul_add(c(-4.0), s2.mul_add(c(2.0), -s1));
+        let eps = h[0].mul_add(c(4.0), s1.mul_add(c(-2.0), s2));
+        let (dx, dy) = (d57 + d86, d57 - d86);
+        let jx = d13 + dx;
+        let jy = d24 + dy;
+        let qx = d13.mul_add(c(-2.0), dx);
+        let qy = d24.mul_add(c(-2.0), dy);
+        let pxx = p13 - p24;
+        let pxy = p57 - p68;
         let rho = c(1.0) + drho;
         let inv = c(1.0) / rho;
         let (fx, fy) = (sp(p.force[0]), sp(p.force[1]));
@@ -278,8 +284,9 @@ impl<T: Real, const SMAG: bool, const FAMILY: u8, const FORCED: bool> Collider<T
         let (e, eps, qx, qy, pxx, pxy, jx, jy) = if FORCED {
             // Guo source in moment space: M F_i (Guo, Zheng & Shi 2002; Lallemand & Luo 2000).
             let uf = ux * fx + uy * fy;
-            let relax =
-                |m: V, meq: V, s: V, src: V| m - s * (m - meq) + (c(1.0) - c(0.5) * s) * src;
+            let relax = |m: V, meq: V, s: V, src: V| {
+                (meq - m).mul_add(s, src.mul_add(s.mul_add(c(-0.5), c(1.0)), m))
+            };
             (
                 relax(e, e_eq, s_e, c(6.0) * uf),
                 relax(eps, eps_eq, s_eps, c(-6.0) * uf),
@@ -291,7 +298,7 @@ impl<T: Real, const SMAG: bool, const FAMILY: u8, const FORCED: bool> Collider<T
                 jy + fy,
             )
         } else {
-            let relax = |m: V, meq: V, s: V| m - s * (m - meq);
+            let relax = |m: V, meq: V, s: V| (meq - m).mul_add(s, m);
             (
                 relax(e, e_eq, s_e),
                 relax(eps, eps_eq, s_eps),
@@ -313,20 +320,90 @@ impl<T: Real, const SMAG: bool, const FAMILY: u8, const FORCED: bool> Collider<T
         let a6 = qy * c(1.0 / 12.0);
         let a7 = pxx * c(0.25);
         let a8 = pxy * c(0.25);
-        let axis = a0 - a1 - c(2.0) * a2;
-        let diag = a0 + c(2.0) * a1 + a2;
-        h[0] = a0 - c(4.0) * a1 + c(4.0) * a2;
-        h[1] = axis + a3 - c(2.0) * a4 + a7;
-        h[2] = axis + a5 - c(2.0) * a6 - a7;
-        h[3] = axis - a3 + c(2.0) * a4 + a7;
-        h[4] = axis - a5 + c(2.0) * a6 - a7;
-        h[5] = diag + a3 + a4 + a5 + a6 + a8;
-        h[6] = diag - a3 - a4 + a5 + a6 - a8;
-        h[7] = diag - a3 - a4 - a5 - a6 + a8;
-        h[8] = diag + a3 + a4 - a5 - a6 - a8;
+        let axis = a2.mul_add(c(-2.0), a0 - a1);
+        let diag = a1.mul_add(c(2.0), a0 + a2);
+        let (tx, ty) = (a4.mul_add(c(-2.0), a3), a6.mul_add(c(-2.0), a5));
+        let (ap, am) = (axis + a7, axis - a7);
+        let (sx, sy) = (a3 + a4, a5 + a6);
+        let (dp, dm) = (diag + a8, diag - a8);
+        h[0] = (a2 - a1).mul_add(c(4.0), a0);
+        h[1] = ap + tx;
+        h[3] = ap - tx;
+        h[2] = am + ty;
+        h[4] = am - ty;
+        h[5] = dp + (sx + sy);
+        h[7] = dp - (sx + sy);
+        h[6] = dm + (sy - sx);
+        h[8] = dm - (sy - sx);
         Moments { drho, rho, ux, uy }
     }
 }
+
+/// Evaluate `$body` with `$c` bound to (a reference to) the collider a lattice's settings
+/// select: [`PopulationBgk`](super::population_bgk::PopulationBgk) for BGK without force
+/// or closure, else the [`MomentCollider`] of the operator's family with the closure and
+/// Guo terms compiled in only where used. `$p` is the lattice's [`CollisionParams`]. Every
+/// kernel dispatches through here, so they all collide a cell alike (same bits).
+macro_rules! with_collider {
+    ($collision:expr, $smag:expr, $p:expr, |$c:ident| $body:expr) => {{
+        #[allow(unused_imports)]
+        use $crate::lbm::collision::{family, Collision, MomentCollider};
+        use $crate::lbm::population_bgk::PopulationBgk;
+        let p = $p;
+        let forced = p.force[0] != Default::default() || p.force[1] != Default::default();
+        match ($collision, $smag, forced) {
+            (Collision::Bgk, false, false) => {
+                let $c = &PopulationBgk(p);
+                $body
+            }
+            (Collision::Bgk, false, true) => {
+                let $c = &MomentCollider::<_, false, { family::BGK }, true>(p);
+                $body
+            }
+            (Collision::Bgk, true, false) => {
+                let $c = &MomentCollider::<_, true, { family::BGK }, false>(p);
+                $body
+            }
+            (Collision::Bgk, true, true) => {
+                let $c = &MomentCollider::<_, true, { family::BGK }, true>(p);
+                $body
+            }
+            (Collision::Trt { .. }, false, false) => {
+                let $c = &MomentCollider::<_, false, { family::TRT }, false>(p);
+                $body
+            }
+            (Collision::Trt { .. }, false, true) => {
+                let $c = &MomentCollider::<_, false, { family::TRT }, true>(p);
+                $body
+            }
+            (Collision::Trt { .. }, true, false) => {
+                let $c = &MomentCollider::<_, true, { family::TRT }, false>(p);
+                $body
+            }
+            (Collision::Trt { .. }, true, true) => {
+                let $c = &MomentCollider::<_, true, { family::TRT }, true>(p);
+                $body
+            }
+            (Collision::Mrt { .. }, false, false) => {
+                let $c = &MomentCollider::<_, false, { family::MRT }, false>(p);
+                $body
+            }
+            (Collision::Mrt { .. }, false, true) => {
+                let $c = &MomentCollider::<_, false, { family::MRT }, true>(p);
+                $body
+            }
+            (Collision::Mrt { .. }, true, false) => {
+                let $c = &MomentCollider::<_, true, { family::MRT }, false>(p);
+                $body
+            }
+            (Collision::Mrt { .. }, true, true) => {
+                let $c = &MomentCollider::<_, true, { family::MRT }, true>(p);
+                $body
+            }
+        }
+    }};
+}
+pub(crate) use with_collider;
 
 #[cfg(test)]
 mod tests {

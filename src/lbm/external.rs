@@ -4,7 +4,7 @@
 //! (walls, obstacles, open faces) and its own collision operator. Nothing here knows about
 //! grains.
 
-use super::collision::{family, Collider, Collision, MomentCollider, Moments};
+use super::collision::{with_collider, Collider, Moments};
 use super::d2q9::Q;
 use super::lattice::{Lattice, FLUID};
 use super::moving::{MovingCells, MovingRun};
@@ -86,23 +86,8 @@ impl<T: Real> Lattice<T> {
     /// (BGK, TRT or MRT, Smagorinsky and body force as configured); returns the
     /// pre-collision moments.
     pub fn collide_one(&self, h: &mut [T; Q]) -> Moments<T> {
-        let p = self.params;
-        let forced = p.force[0] != T::default() || p.force[1] != T::default();
-        macro_rules! go {
-            ($fam:expr) => {
-                match (self.smagorinsky, forced) {
-                    (false, false) => MomentCollider::<T, false, { $fam }, false>(p).collide(h),
-                    (false, true) => MomentCollider::<T, false, { $fam }, true>(p).collide(h),
-                    (true, false) => MomentCollider::<T, true, { $fam }, false>(p).collide(h),
-                    (true, true) => MomentCollider::<T, true, { $fam }, true>(p).collide(h),
-                }
-            };
-        }
-        match self.collision {
-            Collision::Bgk => go!(family::BGK),
-            Collision::Trt { .. } => go!(family::TRT),
-            Collision::Mrt { .. } => go!(family::MRT),
-        }
+        with_collider!(self.collision, self.smagorinsky, self.params, |c| c
+            .collide(h))
     }
 
     /// Recompute the cells of `moving` from the previous buffer into the current one with
@@ -110,31 +95,8 @@ impl<T: Real> Lattice<T> {
     /// Returns the plan index and density of the first cell that went bad.
     pub fn apply_moving(&mut self, moving: &mut MovingCells<'_>) -> Option<(usize, f64)> {
         let run = MovingRun::new(moving, [None, None])?;
-        let p = self.params;
-        let forced = p.force[0] != T::default() || p.force[1] != T::default();
-        macro_rules! go {
-            ($fam:expr) => {
-                match (self.smagorinsky, forced) {
-                    (false, false) => {
-                        self.run_rows(&MomentCollider::<T, false, { $fam }, false>(p), &run)
-                    }
-                    (false, true) => {
-                        self.run_rows(&MomentCollider::<T, false, { $fam }, true>(p), &run)
-                    }
-                    (true, false) => {
-                        self.run_rows(&MomentCollider::<T, true, { $fam }, false>(p), &run)
-                    }
-                    (true, true) => {
-                        self.run_rows(&MomentCollider::<T, true, { $fam }, true>(p), &run)
-                    }
-                }
-            };
-        }
-        match self.collision {
-            Collision::Bgk => go!(family::BGK),
-            Collision::Trt { .. } => go!(family::TRT),
-            Collision::Mrt { .. } => go!(family::MRT),
-        }
+        with_collider!(self.collision, self.smagorinsky, self.params, |c| self
+            .run_rows(c, &run));
         let n = run.first_bad()?;
         Some((n, self.density_at(run.cells()[n] as usize)))
     }

@@ -1,8 +1,9 @@
 //! The fused pull stream–collide sweep (CPU, rayon): one parallel pass over rows per step.
 
-use super::collision::{family, Collider, Collision, MomentCollider};
+use super::collision::{with_collider, Collider};
 use super::d2q9::{CX, CY, Q};
 use super::forces::reduce_forces;
+use super::inplace::prefetch_ahead;
 use super::lanes::Lanes;
 use super::lattice::{FaceCondition, Lattice, Layout, StepError, HALO_DIRS};
 use super::moving::{MovingCells, MovingRun};
@@ -240,33 +241,8 @@ impl<T: Real> Lattice<T> {
     /// One parallel pass over the rows, for the cells of `part` (and the moving-surface
     /// cells of those rows).
     fn sweep_part(&mut self, part: Part, moving: Option<&MovingRun<'_>>) {
-        let p = self.params;
-        let forced = p.force[0] != T::default() || p.force[1] != T::default();
-        macro_rules! dispatch {
-            ($fam:expr) => {
-                match (self.smagorinsky, forced) {
-                    (false, false) => self.sweep(
-                        &MomentCollider::<T, false, { $fam }, false>(p),
-                        part,
-                        moving,
-                    ),
-                    (false, true) => {
-                        self.sweep(&MomentCollider::<T, false, { $fam }, true>(p), part, moving)
-                    }
-                    (true, false) => {
-                        self.sweep(&MomentCollider::<T, true, { $fam }, false>(p), part, moving)
-                    }
-                    (true, true) => {
-                        self.sweep(&MomentCollider::<T, true, { $fam }, true>(p), part, moving)
-                    }
-                }
-            };
-        }
-        match self.collision {
-            Collision::Bgk => dispatch!(family::BGK),
-            Collision::Trt { .. } => dispatch!(family::TRT),
-            Collision::Mrt { .. } => dispatch!(family::MRT),
-        }
+        with_collider!(self.collision, self.smagorinsky, self.params, |c| self
+            .sweep(c, part, moving));
     }
 
     /// One parallel pass over all rows for the cells of `part`.
@@ -443,7 +419,9 @@ unsafe fn bulk_run<T: Real, C: Collider<T>, const LANES: usize>(
         bad |= !(m.rho > zero);
         k += 1;
     }
+    let ahead: [*const T; Q] = s.map(|r| r.as_ptr());
     while k + LANES <= n {
+        prefetch_ahead(&ahead, k);
         let mut h: [Lanes<T, LANES>; Q] = std::array::from_fn(|i| {
             let mut v = [zero; LANES];
             v.copy_from_slice(&s[i][k..k + LANES]);

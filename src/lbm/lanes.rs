@@ -21,6 +21,10 @@ pub trait Simd:
     fn splat(v: Self::Scalar) -> Self;
     /// Element-wise square root.
     fn sqrt(self) -> Self;
+    /// Element-wise `self * a + b`, fused (one rounding) where the build targets FMA
+    /// (x86-64-v3, see `.cargo/config.toml`), two roundings otherwise. Scalar and lane
+    /// forms round alike, so a cell gives the same bits in either path.
+    fn mul_add(self, a: Self, b: Self) -> Self;
 }
 
 impl<T: Real> Simd for T {
@@ -32,6 +36,10 @@ impl<T: Real> Simd for T {
     #[inline(always)]
     fn sqrt(self) -> T {
         Real::sqrt(self)
+    }
+    #[inline(always)]
+    fn mul_add(self, a: T, b: T) -> T {
+        self.mul_add_(a, b)
     }
 }
 
@@ -83,6 +91,14 @@ impl<T: Real, const N: usize> Simd for Lanes<T, N> {
         let mut r = self.0;
         for v in r.iter_mut() {
             *v = Real::sqrt(*v);
+        }
+        Lanes(r)
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        let mut r = self.0;
+        for l in 0..N {
+            r[l] = self.0[l].mul_add_(a.0[l], b.0[l]);
         }
         Lanes(r)
     }

@@ -21,6 +21,7 @@ pub mod kernel;
 pub mod lanes;
 pub mod lattice;
 pub mod moving;
+pub mod population_bgk;
 pub mod real;
 
 pub use backend::FluidBackend;

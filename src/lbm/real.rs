@@ -35,11 +35,9 @@ pub trait Real:
     fn put_le(self, out: &mut [u8]);
     /// Read a value from the little-endian bytes `b[..BYTES]`.
     fn get_le(b: &[u8]) -> Self;
-    /// Fused or plain multiply-add `self * a + b`.
-    #[inline(always)]
-    fn mul_add_(self, a: Self, b: Self) -> Self {
-        self * a + b
-    }
+    /// `self * a + b`: fused (one rounding) where the build targets FMA, plain otherwise
+    /// (a fused multiply-add without the instruction would be a slow library call).
+    fn mul_add_(self, a: Self, b: Self) -> Self;
 }
 
 macro_rules! impl_real {
@@ -62,6 +60,17 @@ macro_rules! impl_real {
             #[inline(always)]
             fn put_le(self, out: &mut [u8]) {
                 out[..Self::BYTES].copy_from_slice(&self.to_le_bytes());
+            }
+            #[inline(always)]
+            fn mul_add_(self, a: Self, b: Self) -> Self {
+                #[cfg(target_feature = "fma")]
+                {
+                    <$t>::mul_add(self, a, b)
+                }
+                #[cfg(not(target_feature = "fma"))]
+                {
+                    self * a + b
+                }
             }
             #[inline(always)]
             fn get_le(b: &[u8]) -> Self {
