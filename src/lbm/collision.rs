@@ -57,7 +57,10 @@ impl Collision {
 /// non-conserved moment with ω = 1/τ; TRT relaxes the even moments (e, ε, p_xx, p_xy) with
 /// ω⁺ = 1/τ and the odd ones (q_x, q_y) with ω⁻ from Λ; MRT uses its own s_e, s_ε, s_q.
 /// That is algebraically identical to the population-space forms (see the tests) and
-/// gives one vectorising kernel for all three.
+/// gives one vectorising kernel for all three. BGK without body force or closure, the
+/// common case, runs the cheaper population-space form instead
+/// ([`PopulationBgk`](super::population_bgk::PopulationBgk), same operator to round-off);
+/// `with_collider!` picks.
 #[derive(Debug, Clone, Copy)]
 pub struct CollisionParams<T> {
     /// Molecular relaxation time τ₀ = 3ν + ½.
@@ -150,7 +153,8 @@ pub fn moments<T: Real>(h: &[T; Q], force: [T; 2]) -> Moments<T> {
 }
 
 /// Shifted equilibrium h_i^eq = w_i [δρ + ρ(3 c·u + 4.5 (c·u)² − 1.5 u²)] (Qian et al. 1992).
-/// Used for initial conditions and as the reference in tests; the kernels work in moment space.
+/// Used for initial conditions and as the reference in tests (the kernels fold it into their
+/// relaxation).
 pub fn equilibrium<T: Real>(m: &Moments<T>) -> [T; Q] {
     let usq = m.ux * m.ux + m.uy * m.uy;
     std::array::from_fn(|i| {
