@@ -57,8 +57,8 @@ impl Collision {
 /// non-conserved moment with ω = 1/τ; TRT relaxes the even moments (e, ε, p_xx, p_xy) with
 /// ω⁺ = 1/τ and the odd ones (q_x, q_y) with ω⁻ from Λ; MRT uses its own s_e, s_ε, s_q.
 /// That is algebraically identical to the population-space forms (see the tests) and
-/// gives one vectorising kernel for all three. BGK without body force or closure, the
-/// common case, runs the cheaper population-space form instead
+/// gives one vectorising kernel for all three. BGK without closure, the common case, runs
+/// the cheaper population-space form instead
 /// ([`PopulationBgk`](super::population_bgk::PopulationBgk), same operator to round-off);
 /// `with_collider!` picks.
 #[derive(Debug, Clone, Copy)]
@@ -344,8 +344,8 @@ impl<T: Real, const SMAG: bool, const FAMILY: u8, const FORCED: bool> Collider<T
 }
 
 /// Evaluate `$body` with `$c` bound to (a reference to) the collider a lattice's settings
-/// select: [`PopulationBgk`](super::population_bgk::PopulationBgk) for BGK without force
-/// or closure, else the [`MomentCollider`] of the operator's family with the closure and
+/// select: [`PopulationBgk`](super::population_bgk::PopulationBgk) for BGK without
+/// closure, else the [`MomentCollider`] of the operator's family with the closure and
 /// Guo terms compiled in only where used. `$p` is the lattice's [`CollisionParams`]. Every
 /// kernel dispatches through here, so they all collide a cell alike (same bits).
 macro_rules! with_collider {
@@ -357,11 +357,11 @@ macro_rules! with_collider {
         let forced = p.force[0] != Default::default() || p.force[1] != Default::default();
         match ($collision, $smag, forced) {
             (Collision::Bgk, false, false) => {
-                let $c = &PopulationBgk(p);
+                let $c = &PopulationBgk::<_, false>(p);
                 $body
             }
             (Collision::Bgk, false, true) => {
-                let $c = &MomentCollider::<_, false, { family::BGK }, true>(p);
+                let $c = &PopulationBgk::<_, true>(p);
                 $body
             }
             (Collision::Bgk, true, false) => {

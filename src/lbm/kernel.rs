@@ -256,6 +256,7 @@ impl<T: Real> Lattice<T> {
         let this = &*self;
         let src = &this.buf[this.cur];
         let min_len = if part == Part::Inner { 4 } else { 64 };
+        let bulk = bulk_kernel::<T, C>();
         row_bad
             .par_iter_mut()
             .enumerate()
@@ -270,7 +271,7 @@ impl<T: Real> Lattice<T> {
                             // SAFETY: row yp of the destination is written by this task only.
                             // 8 lanes: one AVX register of f32, one 64-byte line of f64 (streamed).
                             b |= unsafe {
-                                bulk_run::<T, C, 8>(
+                                bulk(
                                     c,
                                     src,
                                     writer,
@@ -373,6 +374,39 @@ impl<T: Real> Lattice<T> {
             density: worst.1,
         }
     }
+}
+
+/// A bulk row kernel, as [`bulk_run`] with 8 lanes.
+type BulkFn<T, C> = unsafe fn(&C, &[T], RowWriter<T>, usize, usize, usize, usize, usize) -> bool;
+
+/// The bulk row kernel for this CPU: an AVX-512 build (32 vector registers) where the CPU
+/// has AVX-512F/VL, else the build target's; same operations in the same order, same bits.
+fn bulk_kernel<T: Real, C: Collider<T>>() -> BulkFn<T, C> {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl") {
+        return bulk_run_avx512::<T, C>;
+    }
+    bulk_run::<T, C, 8>
+}
+
+/// [`bulk_run`] (8 lanes) compiled with AVX-512.
+///
+/// # Safety
+/// As [`bulk_run`]; the CPU has AVX-512F and AVX-512VL.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn bulk_run_avx512<T: Real, C: Collider<T>>(
+    c: &C,
+    src: &[T],
+    dst: RowWriter<T>,
+    plane: usize,
+    stride: usize,
+    yp: usize,
+    x0: usize,
+    x1: usize,
+) -> bool {
+    bulk_run::<T, C, 8>(c, src, dst, plane, stride, yp, x0, x1)
 }
 
 /// Stream–collide the bulk cells `[x0, x1)` of padded row `yp`, `LANES` cells at a time
