@@ -18,7 +18,7 @@ use super::aligned::AlignedBuf;
 use super::boundary::{Access, Src};
 use super::collision::{with_collider, Collider};
 use super::d2q9::{CX, CY, MIRROR_X, MIRROR_Y, OPP, Q};
-use super::lanes::Lanes;
+use super::lanes::{has_avx512, prefetch_ahead, Lanes};
 use super::lattice::{Face, FaceCondition, Lattice, Layout, StepError, FLUID, HALO_DIRS};
 use super::real::Real;
 use decomposition::{Comm, Side};
@@ -337,7 +337,7 @@ type BulkFn<T, C> = unsafe fn(&C, *mut T, Access, usize, usize) -> bool;
 /// same bits.
 fn bulk_kernel<T: Real, C: Collider<T>>() -> BulkFn<T, C> {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl") {
+    if has_avx512() {
         return bulk_run_aa_avx512::<T, C>;
     }
     bulk_run_aa::<T, C, 8>
@@ -357,29 +357,6 @@ unsafe fn bulk_run_aa_avx512<T: Real, C: Collider<T>>(
     n: usize,
 ) -> bool {
     bulk_run_aa::<T, C, 8>(c, base, acc, k0, n)
-}
-
-/// How far ahead of the sweep the bulk kernels ask for their nine streams, in bytes. With
-/// nine read streams (plus nine write streams in the two-array kernel) the hardware
-/// prefetchers fall behind, and one core keeps too few misses in flight; asking ~2 KiB
-/// ahead took the f32 in-place kernel from ~300 to ~550 MLUPS on one core (AMD EPYC,
-/// 1024² and 4096² boxes; 1–4 KiB all do about as well).
-pub(crate) const PREFETCH_BYTES: usize = 2048;
-
-/// Ask for the cache lines [`PREFETCH_BYTES`] ahead of element `k` of each stream (a hint:
-/// never faults, even past the end of a buffer).
-#[inline(always)]
-pub(crate) fn prefetch_ahead<T>(streams: &[*const T; Q], k: usize) {
-    #[cfg(target_arch = "x86_64")]
-    for p in streams {
-        let ahead = p.wrapping_add(k + PREFETCH_BYTES / std::mem::size_of::<T>());
-        // SAFETY: a prefetch is a hint; it does not access memory architecturally.
-        unsafe {
-            std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
-                ahead as *const i8,
-            )
-        };
-    }
 }
 
 /// The bulk cells `[k0, k0 + n)` of one row, in place, `LANES` at a time (scalar for the

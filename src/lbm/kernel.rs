@@ -3,8 +3,7 @@
 use super::collision::{with_collider, Collider};
 use super::d2q9::{CX, CY, Q};
 use super::forces::reduce_forces;
-use super::inplace::prefetch_ahead;
-use super::lanes::Lanes;
+use super::lanes::{has_avx512, prefetch_ahead, Lanes};
 use super::lattice::{FaceCondition, Lattice, Layout, StepError, HALO_DIRS};
 use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
@@ -383,7 +382,7 @@ type BulkFn<T, C> = unsafe fn(&C, &[T], RowWriter<T>, usize, usize, usize, usize
 /// has AVX-512F/VL, else the build target's; same operations in the same order, same bits.
 fn bulk_kernel<T: Real, C: Collider<T>>() -> BulkFn<T, C> {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl") {
+    if has_avx512() {
         return bulk_run_avx512::<T, C>;
     }
     bulk_run::<T, C, 8>
