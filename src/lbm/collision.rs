@@ -349,60 +349,52 @@ impl<T: Real, const SMAG: bool, const FAMILY: u8, const FORCED: bool> Collider<T
 /// Guo terms compiled in only where used. `$p` is the lattice's [`CollisionParams`]. Every
 /// kernel dispatches through here, so they all collide a cell alike (same bits).
 macro_rules! with_collider {
+    (@bind $ctor:expr, $c:ident, $body:expr) => {{
+        let $c = &$ctor;
+        $body
+    }};
     ($collision:expr, $smag:expr, $p:expr, |$c:ident| $body:expr) => {{
         #[allow(unused_imports)]
-        use $crate::lbm::collision::{family, Collision, MomentCollider};
-        use $crate::lbm::population_bgk::PopulationBgk;
+        use $crate::lbm::collision::{family::*, Collision, MomentCollider as M};
+        use $crate::lbm::population_bgk::PopulationBgk as P;
         let p = $p;
         let forced = p.force[0] != Default::default() || p.force[1] != Default::default();
         match ($collision, $smag, forced) {
             (Collision::Bgk, false, false) => {
-                let $c = &PopulationBgk::<_, false>(p);
-                $body
+                with_collider!(@bind P::<_, false>(p), $c, $body)
             }
             (Collision::Bgk, false, true) => {
-                let $c = &PopulationBgk::<_, true>(p);
-                $body
+                with_collider!(@bind P::<_, true>(p), $c, $body)
             }
             (Collision::Bgk, true, false) => {
-                let $c = &MomentCollider::<_, true, { family::BGK }, false>(p);
-                $body
+                with_collider!(@bind M::<_, true, { BGK }, false>(p), $c, $body)
             }
             (Collision::Bgk, true, true) => {
-                let $c = &MomentCollider::<_, true, { family::BGK }, true>(p);
-                $body
+                with_collider!(@bind M::<_, true, { BGK }, true>(p), $c, $body)
             }
             (Collision::Trt { .. }, false, false) => {
-                let $c = &MomentCollider::<_, false, { family::TRT }, false>(p);
-                $body
+                with_collider!(@bind M::<_, false, { TRT }, false>(p), $c, $body)
             }
             (Collision::Trt { .. }, false, true) => {
-                let $c = &MomentCollider::<_, false, { family::TRT }, true>(p);
-                $body
+                with_collider!(@bind M::<_, false, { TRT }, true>(p), $c, $body)
             }
             (Collision::Trt { .. }, true, false) => {
-                let $c = &MomentCollider::<_, true, { family::TRT }, false>(p);
-                $body
+                with_collider!(@bind M::<_, true, { TRT }, false>(p), $c, $body)
             }
             (Collision::Trt { .. }, true, true) => {
-                let $c = &MomentCollider::<_, true, { family::TRT }, true>(p);
-                $body
+                with_collider!(@bind M::<_, true, { TRT }, true>(p), $c, $body)
             }
             (Collision::Mrt { .. }, false, false) => {
-                let $c = &MomentCollider::<_, false, { family::MRT }, false>(p);
-                $body
+                with_collider!(@bind M::<_, false, { MRT }, false>(p), $c, $body)
             }
             (Collision::Mrt { .. }, false, true) => {
-                let $c = &MomentCollider::<_, false, { family::MRT }, true>(p);
-                $body
+                with_collider!(@bind M::<_, false, { MRT }, true>(p), $c, $body)
             }
             (Collision::Mrt { .. }, true, false) => {
-                let $c = &MomentCollider::<_, true, { family::MRT }, false>(p);
-                $body
+                with_collider!(@bind M::<_, true, { MRT }, false>(p), $c, $body)
             }
             (Collision::Mrt { .. }, true, true) => {
-                let $c = &MomentCollider::<_, true, { family::MRT }, true>(p);
-                $body
+                with_collider!(@bind M::<_, true, { MRT }, true>(p), $c, $body)
             }
         }
     }};

@@ -132,6 +132,8 @@ pub(crate) const PREFETCH_BYTES: usize = 2048;
 /// never faults, even past the end of a buffer).
 #[inline(always)]
 pub(crate) fn prefetch_ahead<T>(streams: &[*const T; Q], k: usize) {
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (streams, k);
     #[cfg(target_arch = "x86_64")]
     for p in streams {
         let ahead = p.wrapping_add(k + PREFETCH_BYTES / std::mem::size_of::<T>());
