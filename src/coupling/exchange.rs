@@ -54,16 +54,6 @@ pub enum CouplingError {
     },
 }
 
-/// Where a link or share of a plan belongs: the grain (index into the views), the image
-/// of its centre that the cell sees (x, lattice units) and the arm from that centre to the
-/// point the momentum acts at.
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct Owner {
-    pub(super) grain: u32,
-    pub(super) image_x: f64,
-    pub(super) arm: [f64; 2],
-}
-
 /// A recomputed cell that went bad: padded cell, the grain (view) it belongs to, density.
 pub type Unstable = (usize, u32, f64);
 
@@ -93,9 +83,9 @@ pub struct Coupler {
     pub(super) mark: Vec<bool>,
     /// The plans of the last exchange and where each link or share belongs.
     pub(super) links: LinkPlan,
-    pub(super) link_owner: Vec<Owner>,
+    /// The grain (view) of each link; its image and arm are recomputed where needed.
+    pub(super) link_grain: Vec<u32>,
     pub(super) psm: PsmPlan,
-    pub(super) share_owner: Vec<Owner>,
     /// Momentum per link or share of the last exchange, and scratch lists.
     pub(super) link_momentum: Vec<f64>,
     pub(super) share_momentum: Vec<[f64; 2]>,
@@ -135,9 +125,8 @@ impl Coupler {
             sorted: Vec::new(),
             mark: vec![false; cells],
             links: LinkPlan::default(),
-            link_owner: Vec::new(),
+            link_grain: Vec::new(),
             psm: PsmPlan::default(),
-            share_owner: Vec::new(),
             link_momentum: Vec::new(),
             share_momentum: Vec::new(),
             rest: Vec::new(),

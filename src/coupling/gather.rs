@@ -44,10 +44,10 @@ pub fn gather2<A, B, C, F>(
         total += c;
     }
     offsets.push(total);
+    // Every slot is written by `fill`, so only slots beyond the old length need a value
+    // first: keeping the old ones saves rewriting the whole output every call.
     let len = total as usize;
-    a.clear();
     a.resize(len, A::default());
-    b.clear();
     b.resize(len, B::default());
     let (pa, pb) = (Shared(a.as_mut_ptr()), Shared(b.as_mut_ptr()));
     let offsets = &*offsets;
@@ -135,6 +135,22 @@ mod tests {
         assert_eq!(out, expect);
         assert_eq!(off.len(), 501);
         assert_eq!(off[500] as usize, expect.len());
+        // A second, shorter call reuses the output without a stale item left over.
+        gather(
+            7,
+            &mut off,
+            &mut out,
+            |s| s % 3,
+            |s, slice| {
+                for (k, v) in slice.iter_mut().enumerate() {
+                    *v = (s + 1000, k);
+                }
+            },
+        );
+        let expect: Vec<(usize, usize)> = (0..7)
+            .flat_map(|s| (0..s % 3).map(move |k| (s + 1000, k)))
+            .collect();
+        assert_eq!(out, expect);
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Bounce-back schemes: the fluid cells next to a grain (its *boundary*), the plan of their
 //! links to it, and the loads they hand to each grain.
 
-use super::exchange::{neighbour, Coupler, Owner, Unstable};
+use super::exchange::{neighbour, Coupler, Unstable};
 use super::gather::{gather, gather2, group_by_row};
 use super::map::{nearest_image, GrainView, NONE};
 use super::Scheme;
@@ -81,7 +81,7 @@ impl Coupler {
             order.len(),
             &mut self.links.start,
             &mut self.links.links,
-            &mut self.link_owner,
+            &mut self.link_grain,
             |c| {
                 let k = boundary[order[c] as usize] as usize;
                 (1..Q)
@@ -126,11 +126,7 @@ impl Coupler {
                         // (seed eq. 5.45).
                         wall: 6.0 * W[i] * (cx * ub[0] + cy * ub[1]),
                     };
-                    own[at] = Owner {
-                        grain: g,
-                        image_x: image[0],
-                        arm: [mid[0] - image[0], mid[1] - image[1]],
-                    };
+                    own[at] = g;
                     at += 1;
                 }
             },
@@ -149,24 +145,26 @@ impl Coupler {
         views: &[GrainView],
         bad: Option<(usize, f64)>,
     ) -> Option<Unstable> {
+        let f = self.frame;
         for (c, &k) in self.links.cells.iter().enumerate() {
             let col = self.column(k as usize);
+            let centre = f.centre(k as usize);
             for l in self.links.start[c] as usize..self.links.start[c + 1] as usize {
-                let (link, o, m) = (
-                    &self.links.links[l],
-                    &self.link_owner[l],
-                    self.link_momentum[l],
-                );
-                let i = link.dir as usize;
-                let (px, py) = (-m * CX[i] as f64, -m * CY[i] as f64);
-                let g = o.grain as usize;
-                let load = [px, py, o.arm[0] * py - o.arm[1] * px];
-                self.sums.add(g, views[g].centre[0], o.image_x, col, load);
+                let (i, m) = (self.links.links[l].dir as usize, self.link_momentum[l]);
+                let g = self.link_grain[l] as usize;
+                // The link's midpoint and the grain's image seen from it, as in the plan.
+                let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+                let image = nearest_image(&f, &views[g], mid);
+                let arm = [mid[0] - image[0], mid[1] - image[1]];
+                let (px, py) = (-m * cx, -m * cy);
+                let load = [px, py, arm[0] * py - arm[1] * px];
+                self.sums.add(g, views[g].centre[0], image[0], col, load);
             }
         }
         bad.map(|(c, rho)| {
             let l = self.links.start[c] as usize;
-            (self.links.cells[c] as usize, self.link_owner[l].grain, rho)
+            (self.links.cells[c] as usize, self.link_grain[l], rho)
         })
     }
 }

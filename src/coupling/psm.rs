@@ -2,8 +2,8 @@
 //! grain overlaps is collided as a blend of the fluid's operator and the solid's, weighted by
 //! the exact solid fraction.
 
-use super::exchange::{Coupler, Owner, Unstable};
-use super::gather::{gather, gather2, group_by_row};
+use super::exchange::{Coupler, Unstable};
+use super::gather::{gather, group_by_row};
 use super::map::{for_shares, GrainView, Share};
 use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
@@ -112,7 +112,7 @@ impl Coupler {
             })
             .collect_into_vec(&mut plan.total);
         let (cells, totals) = (&plan.cells, &plan.total);
-        let fill = |c: usize, out: &mut [SolidShare], own: &mut [Owner]| {
+        let fill = |c: usize, out: &mut [SolidShare]| {
             let eps = eps_of(c);
             let centre = f.centre(cells[c] as usize);
             let group = &shares[start[c] as usize..start[c + 1] as usize];
@@ -131,19 +131,14 @@ impl Coupler {
                     }
                     .surface_velocity(centre),
                 };
-                own[j] = Owner {
-                    grain: sh.grain,
-                    image_x: sh.centre[0],
-                    arm: [centre[0] - sh.centre[0], centre[1] - sh.centre[1]],
-                };
             }
         };
+        // Plan share s is `sorted[s]`: its grain and image are read from there later.
         let mut offsets = std::mem::take(&mut self.candidates);
-        gather2(
+        gather(
             cells.len(),
             &mut offsets,
             &mut plan.shares,
-            &mut self.share_owner,
             |c| (start[c + 1] - start[c]) as usize,
             fill,
         );
@@ -157,19 +152,24 @@ impl Coupler {
         views: &[GrainView],
         bad: Option<(usize, f64)>,
     ) -> Option<Unstable> {
+        let f = self.frame;
         for (c, &k) in self.psm.cells.iter().enumerate() {
             let col = self.column(k as usize);
+            let centre = f.centre(k as usize);
             for s in self.psm.start[c] as usize..self.psm.start[c + 1] as usize {
-                let (o, p) = (&self.share_owner[s], self.share_momentum[s]);
-                let g = o.grain as usize;
+                // Plan share s is sorted share s: its grain and the image it sees.
+                let (sh, p) = (&self.sorted[s], self.share_momentum[s]);
+                let g = sh.grain as usize;
+                let arm = [centre[0] - sh.centre[0], centre[1] - sh.centre[1]];
                 // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
-                let load = [p[0], p[1], o.arm[0] * p[1] - o.arm[1] * p[0]];
-                self.sums.add(g, views[g].centre[0], o.image_x, col, load);
+                let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
+                self.sums
+                    .add(g, views[g].centre[0], sh.centre[0], col, load);
             }
         }
         bad.map(|(c, rho)| {
             let s = self.psm.start[c] as usize;
-            (self.psm.cells[c] as usize, self.share_owner[s].grain, rho)
+            (self.psm.cells[c] as usize, self.sorted[s].grain, rho)
         })
     }
 }
