@@ -73,6 +73,10 @@ pub struct Coupler {
     pub(super) next_touched: Vec<u32>,
     /// Interior exterior-fluid cells with at least one covered neighbour.
     pub(super) boundary: Vec<u32>,
+    /// Per boundary cell: bit i − 1 set where its neighbour at x − c_i is covered.
+    pub(super) boundary_mask: Vec<u8>,
+    /// Per-task lists of boundary candidates (cell, link mask), in grain order.
+    pub(super) chunks: Vec<Vec<(u32, u8)>>,
     /// Interior covered cells.
     pub(super) covered: Vec<u32>,
     /// Solid fractions (partially saturated method), grain by grain, and the same in plan
@@ -120,6 +124,8 @@ impl Coupler {
             touched: Vec::new(),
             next_touched: Vec::new(),
             boundary: Vec::new(),
+            boundary_mask: Vec::new(),
+            chunks: Vec::new(),
             covered: Vec::new(),
             shares: Vec::new(),
             sorted: Vec::new(),

@@ -2,7 +2,7 @@
 //! links to it, and the loads they hand to each grain.
 
 use super::exchange::{neighbour, Coupler, Unstable};
-use super::gather::{gather, gather2, group_by_row};
+use super::gather::{gather2, gather_chunked, group_by_row};
 use super::map::{nearest_image, GrainView, NONE};
 use super::Scheme;
 use crate::lbm::d2q9::{CX, CY, Q, W};
@@ -18,6 +18,7 @@ impl Coupler {
     pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         self.covered.clear();
         self.boundary.clear();
+        self.boundary_mask.clear();
         if self.scheme == Scheme::Psm {
             return;
         }
@@ -34,27 +35,16 @@ impl Coupler {
         );
         let owner = &self.owner;
         let fluid = |k: usize| lat.is_fluid_at(k);
-        gather(
-            views.len(),
-            &mut self.offsets,
-            &mut self.candidates,
-            |g| {
-                let mut n = 0;
-                boundary_of(&f, owner, &fluid, views, g, |_| n += 1);
-                n
-            },
-            |g, out| {
-                let mut at = 0;
-                boundary_of(&f, owner, &fluid, views, g, |k| {
-                    out[at] = k as u32;
-                    at += 1;
-                });
-            },
-        );
-        for &k in &self.candidates {
+        gather_chunked(views.len(), &mut self.chunks, |g, out| {
+            boundary_of(&f, owner, &fluid, views, g, |k, mask| {
+                out.push((k as u32, mask))
+            });
+        });
+        for &(k, mask) in self.chunks.iter().flatten() {
             if !self.mark[k as usize] {
                 self.mark[k as usize] = true;
                 self.boundary.push(k);
+                self.boundary_mask.push(mask);
             }
         }
         for &k in &self.boundary {
@@ -67,7 +57,7 @@ impl Coupler {
     pub(super) fn plan_links<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let interpolated = self.scheme == Scheme::Interpolated;
-        let (owner, boundary) = (&self.owner, &self.boundary);
+        let (owner, boundary, masks) = (&self.owner, &self.boundary, &self.boundary_mask);
         group_by_row(
             boundary.len(),
             f.ny,
@@ -82,21 +72,14 @@ impl Coupler {
             &mut self.links.start,
             &mut self.links.links,
             &mut self.link_grain,
-            |c| {
-                let k = boundary[order[c] as usize] as usize;
-                (1..Q)
-                    .filter(|&i| owner[neighbour(&f, k, i, -1)] != NONE)
-                    .count()
-            },
+            |c| masks[order[c] as usize].count_ones() as usize,
             |c, out, own| {
                 let k = boundary[order[c] as usize] as usize;
+                let mask = masks[order[c] as usize];
                 let centre = f.centre(k);
                 let mut at = 0;
-                for i in 1..Q {
+                for i in (1..Q).filter(|&i| mask & (1 << (i - 1)) != 0) {
                     let g = owner[neighbour(&f, k, i, -1)];
-                    if g == NONE {
-                        continue;
-                    }
                     let grain = &views[g as usize];
                     let (cx, cy) = (CX[i] as f64, CY[i] as f64);
                     let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
@@ -169,14 +152,16 @@ impl Coupler {
     }
 }
 
-/// Visit the boundary cells of grain `g` (see [`Coupler::rebuild_lists`]) in order.
+/// Visit the boundary cells of grain `g` (see [`Coupler::rebuild_lists`]) in order, each
+/// with its link mask: bit i − 1 set where the neighbour at x − c_i is covered (by any
+/// grain).
 fn boundary_of(
     f: &super::map::SlabFrame,
     owner: &[u32],
     fluid: &impl Fn(usize) -> bool,
     views: &[GrainView],
     g: usize,
-    mut visit: impl FnMut(usize),
+    mut visit: impl FnMut(usize, u8),
 ) {
     let grain = &views[g];
     for c in f.images(grain) {
@@ -187,7 +172,9 @@ fn boundary_of(
                 && fluid(k)
                 && (1..Q).any(|i| owner[neighbour(f, k, i, -1)] == g as u32)
             {
-                visit(k);
+                let covered = |i: usize| owner[neighbour(f, k, i, -1)] != NONE;
+                let mask = (1..Q).fold(0u8, |m, i| m | ((covered(i) as u8) << (i - 1)));
+                visit(k, mask);
             }
         });
     }
