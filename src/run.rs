@@ -202,6 +202,10 @@ pub struct Summary {
     pub stage_seconds: BTreeMap<&'static str, f64>,
     /// Seconds per stage over ranks: sum, max, min, mean (load imbalance shows as max ≫ min).
     pub stages: BTreeMap<&'static str, StageStats>,
+    /// Coupled runs: the "coupling" stage's seconds per pass (`coupling::PASSES`), the
+    /// slowest rank's. Absent without grains.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub coupling_pass_seconds: BTreeMap<&'static str, f64>,
     /// Checkpoints written during the run.
     pub checkpoints: Vec<PathBuf>,
     /// HDF5 snapshot data written (bytes, all ranks) and the slowest rank's seconds in
@@ -568,6 +572,11 @@ fn run_typed<T: Real + hdf5::H5Type>(
             (*name, stats)
         })
         .collect();
+    // Every rank of a coupled run holds grains (maybe none in view), so this is collective.
+    let coupling_pass_seconds = match &sim.grains {
+        Some(g) => stage_stats(&crate::coupling::PASSES, &g.pass_seconds(), comm).1,
+        None => BTreeMap::new(),
+    };
     let wall = comm.max_f64(wall);
     let mut halo_bytes = [sim.fluid.lattice().halo_bytes_per_step() as f64];
     comm.sum_f64(&mut halo_bytes);
@@ -604,6 +613,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         kernel_mlups: updates / stages[STAGES[stage::COLLIDE_STREAM]].max_s.max(1e-12) / 1e6,
         stage_seconds: stages.iter().map(|(k, v)| (*k, v.max_s)).collect(),
         stages,
+        coupling_pass_seconds,
         checkpoints,
         snapshot_bytes: out.bytes,
         snapshot_write_s: comm.max_f64(out.write_s),

@@ -22,6 +22,27 @@ fn with_scheme(scene: &str, scheme: &str, dir: &Path) -> String {
 }
 
 /// The scene on 1 rank and on each of `ranks`: identical fields, grains and summaries.
+/// The coupling stage's per-pass seconds are all reported and, on one rank, add up to no
+/// more than the stage itself (they are timed inside it).
+fn assert_passes_inside_the_stage(s: &serde_json::Value, scheme: &str) {
+    let passes = &s["coupling_pass_seconds"];
+    let mut sum = 0.0;
+    for name in grainflow::coupling::PASSES {
+        let v = passes[name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{scheme}: no coupling pass {name} in {passes}"));
+        assert!(v >= 0.0, "{scheme}: pass {name} took {v} s");
+        sum += v;
+    }
+    // Each scheme maps its grains and plans every step.
+    assert!(passes["map"].as_f64().unwrap() > 0.0 && passes["plan"].as_f64().unwrap() > 0.0);
+    let stage = s["stage_seconds"]["coupling"].as_f64().unwrap();
+    assert!(
+        sum <= stage * (1.0 + 1e-9) + 1e-6,
+        "{scheme}: passes {sum} s > stage {stage} s"
+    );
+}
+
 fn rank_invariance(scene: &str, schemes: &[&str], ranks: &[usize]) {
     let d = tempfile::tempdir().unwrap();
     for scheme in schemes {
@@ -29,6 +50,7 @@ fn rank_invariance(scene: &str, schemes: &[&str], ranks: &[usize]) {
         let one = d.path().join(format!("{scheme}-np1"));
         run_ok(1, &scene, &one, &[]);
         assert_eq!(summary(&one)["status"], "ok");
+        assert_passes_inside_the_stage(&summary(&one), scheme);
         for &n in ranks {
             let many = d.path().join(format!("{scheme}-np{n}"));
             run_ok(n, &scene, &many, &[]);

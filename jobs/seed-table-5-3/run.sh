@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Time the seed's Table 5.3 case (100 iterations) per scheme, precision and thread count;
-# prints the wall time and the per-stage split from each summary.json.
+# prints the wall time, the per-stage split and the coupling stage's passes from each
+# summary.json.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bin=target/release/grainflow
@@ -21,6 +22,9 @@ step = st["collide-stream"] + st["halo-wait"] + st["coupling"] + st["dem"] + st[
 print(f"{sys.argv[2]:13s} {sys.argv[3]} {sys.argv[4]} threads: 100 steps {step:6.2f} s "
       f"(fluid {st['collide-stream']:.2f}, coupling {st['coupling']:.2f} = {100*st['coupling']/step:.0f} %, "
       f"dem {st['dem']:.2f}, boundaries {st['boundaries']:.2f}); wall incl. output {s['wall_time_s']:.2f} s")
+passes = s.get("coupling_pass_seconds", {})
+if passes:
+    print("    coupling passes: " + ", ".join(f"{k} {v:.2f}" for k, v in passes.items()))
 PY
     done
   done

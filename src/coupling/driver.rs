@@ -259,6 +259,11 @@ impl LbmDem {
         self.substeps
     }
 
+    /// Seconds this rank spent in each pass of the "coupling" stage ([`super::PASSES`]).
+    pub fn pass_seconds(&self) -> [f64; 6] {
+        self.coupler.pass_seconds()
+    }
+
     /// The coupler (maps, loads).
     pub fn coupler(&self) -> &Coupler {
         &self.coupler
@@ -416,7 +421,9 @@ impl LbmDem {
         self.step = step;
         let bad = self.coupler.collect(&self.views, bad);
         self.agree(comm, bad)?;
+        let t = std::time::Instant::now();
         self.load = self.reduce(Which::Exchange, comm);
+        self.coupler.passes[super::pass::REDUCE] += t.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -531,7 +538,9 @@ impl LbmDem {
     pub fn remap<T: Real>(&mut self, fluid: &mut dyn FluidBackend<T>, comm: &dyn Comm) {
         self.coupler.remap(fluid, &self.views, &self.ids, comm);
         if self.coupler.scheme() != super::Scheme::Psm {
+            let t = std::time::Instant::now();
             self.handover = self.reduce(Which::Handover, comm);
+            self.coupler.passes[super::pass::REDUCE] += t.elapsed().as_secs_f64();
         }
     }
 }

@@ -105,6 +105,8 @@ pub struct Coupler {
     pub(super) refill_momentum: Vec<[f64; 2]>,
     /// Cells changing hands: (cell, grain view, newly covered).
     pub(super) events: Vec<(u32, u32, bool)>,
+    /// Seconds spent in each of [`super::PASSES`] on this rank.
+    pub(super) passes: [f64; 6],
     /// Loads of the last exchange and of the last remap's hand-over, per grain and column.
     pub(super) sums: ColumnSums,
     pub(super) handover: ColumnSums,
@@ -144,6 +146,7 @@ impl Coupler {
             cell_momentum: Vec::new(),
             refill_momentum: Vec::new(),
             events: Vec::new(),
+            passes: [0.0; 6],
             sums: ColumnSums::default(),
             handover: ColumnSums::default(),
         }
@@ -219,10 +222,12 @@ impl Coupler {
     /// built for the grains `views`. Then let the fluid sweep with [`Coupler::moving`] and
     /// collect the loads with [`Coupler::collect`].
     pub fn plan<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
+        let t = std::time::Instant::now();
         match self.scheme {
             Scheme::Psm => self.plan_psm(lat, views),
             _ => self.plan_links(lat, views),
         }
+        self.passes[super::pass::PLAN] += t.elapsed().as_secs_f64();
     }
 
     /// The planned cells for the fluid's sweep, with where their momenta go.
@@ -237,11 +242,19 @@ impl Coupler {
     /// (see [`Coupler::loads`]). `bad` is what the sweep reported (plan index, density); it
     /// comes back as the first bad cell (padded cell, grain view, density).
     pub fn collect(&mut self, views: &[GrainView], bad: Option<(usize, f64)>) -> Option<Unstable> {
+        let t = std::time::Instant::now();
         self.sums.reset(views, self.frame.global_nx);
-        match self.scheme {
+        let bad = match self.scheme {
             Scheme::Psm => self.collect_psm(views, bad),
             _ => self.collect_links(views, bad),
-        }
+        };
+        self.passes[super::pass::COLLECT] += t.elapsed().as_secs_f64();
+        bad
+    }
+
+    /// Seconds this rank spent in each of [`super::PASSES`] so far.
+    pub fn pass_seconds(&self) -> [f64; 6] {
+        self.passes
     }
 
     /// The loads of the last exchange, per grain view and column.

@@ -25,8 +25,10 @@ impl Coupler {
         ids: &[u64],
         comm: &dyn Comm,
     ) {
+        let t = std::time::Instant::now();
         self.handover.reset(views, self.frame.global_nx);
         self.map(fluid.lattice(), views);
+        self.passes[super::pass::MAP] += t.elapsed().as_secs_f64();
         if self.scheme == Scheme::Psm {
             self.owner_ids.clear();
             self.owner_ids.extend_from_slice(ids);
@@ -37,6 +39,7 @@ impl Coupler {
             let (x, y) = f.local(k as usize);
             x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
         };
+        let t = std::time::Instant::now();
         // Refills average whole neighbour cells, across faces too: the halos must hold
         // them now, as one rank would see them.
         fluid.refresh_halos_full(comm);
@@ -100,7 +103,10 @@ impl Coupler {
         std::mem::swap(&mut self.touched, &mut self.next_touched);
         self.owner_ids.clear();
         self.owner_ids.extend_from_slice(ids);
+        self.passes[super::pass::HANDOVER] += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
         self.rebuild_lists(fluid.lattice(), views);
+        self.passes[super::pass::LISTS] += t.elapsed().as_secs_f64();
     }
 
     /// How to refill padded cell `k` that grain `g` has just uncovered: its neighbours

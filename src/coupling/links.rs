@@ -77,8 +77,8 @@ impl Coupler {
                 let k = boundary[order[c] as usize] as usize;
                 let mask = masks[order[c] as usize];
                 let centre = f.centre(k);
-                let mut at = 0;
-                for i in (1..Q).filter(|&i| mask & (1 << (i - 1)) != 0) {
+                let dirs = (1..Q).filter(|&i| mask & (1 << (i - 1)) != 0);
+                for (at, i) in dirs.enumerate() {
                     let g = owner[neighbour(&f, k, i, -1)];
                     let grain = &views[g as usize];
                     let (cx, cy) = (CX[i] as f64, CY[i] as f64);
@@ -110,7 +110,6 @@ impl Coupler {
                         wall: 6.0 * W[i] * (cx * ub[0] + cy * ub[1]),
                     };
                     own[at] = g;
-                    at += 1;
                 }
             },
         );

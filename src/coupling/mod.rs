@@ -25,6 +25,22 @@ mod psm;
 pub mod sums;
 
 pub use driver::{LbmDem, RestoredCoupling};
+
+/// The passes of the "coupling" stage, as [`LbmDem::pass_seconds`] times them: planning the
+/// cells at the grains' surfaces, collecting their loads, reducing the loads on the
+/// grains' owners, mapping the grains onto the cells, handing over covered and uncovered
+/// cells (bounce-back schemes), and rebuilding the boundary lists.
+pub const PASSES: [&str; 6] = ["plan", "collect", "reduce", "map", "handover", "lists"];
+
+/// Index of each pass in [`PASSES`].
+pub(crate) mod pass {
+    pub const PLAN: usize = 0;
+    pub const COLLECT: usize = 1;
+    pub const REDUCE: usize = 2;
+    pub const MAP: usize = 3;
+    pub const HANDOVER: usize = 4;
+    pub const LISTS: usize = 5;
+}
 pub use exchange::{Coupler, CouplingError};
 pub use plan::{plan, CouplingPlan};
 
