@@ -82,8 +82,7 @@ impl Coupler {
                     let g = owner[neighbour(&f, k, i, -1)];
                     let grain = &views[g as usize];
                     let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                    let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
-                    let image = nearest_image(&f, grain, mid);
+                    let (mid, image) = link_midpoint(&f, centre, i, grain);
                     let ub = GrainView {
                         centre: image,
                         ..*grain
@@ -134,10 +133,8 @@ impl Coupler {
             for l in self.links.start[c] as usize..self.links.start[c + 1] as usize {
                 let (i, m) = (self.links.links[l].dir as usize, self.link_momentum[l]);
                 let g = self.link_grain[l] as usize;
-                // The link's midpoint and the grain's image seen from it, as in the plan.
                 let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
-                let image = nearest_image(&f, &views[g], mid);
+                let (mid, image) = link_midpoint(&f, centre, i, &views[g]);
                 let arm = [mid[0] - image[0], mid[1] - image[1]];
                 let (px, py) = (-m * cx, -m * cy);
                 let load = [px, py, arm[0] * py - arm[1] * px];
@@ -149,6 +146,23 @@ impl Coupler {
             (self.links.cells[c] as usize, self.link_grain[l], rho)
         })
     }
+}
+
+/// The midpoint of the link from the cell centred at `centre` along −c_i (where the
+/// half-way wall sits) and the image of `grain` nearest to it: the plan and the load
+/// collection both use this, so a link's velocity and its torque arm agree to the bit.
+#[inline]
+fn link_midpoint(
+    f: &super::map::SlabFrame,
+    centre: [f64; 2],
+    i: usize,
+    grain: &GrainView,
+) -> ([f64; 2], [f64; 2]) {
+    let mid = [
+        centre[0] - 0.5 * CX[i] as f64,
+        centre[1] - 0.5 * CY[i] as f64,
+    ];
+    (mid, nearest_image(f, grain, mid))
 }
 
 /// Visit the boundary cells of grain `g` (see [`Coupler::rebuild_lists`]) in order, each
