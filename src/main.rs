@@ -465,7 +465,7 @@ fn print_check(s: &scene::ValidScene) {
     println!("  Reynolds number  {:.4}", u.reynolds);
     println!("  steps            {}", step_count(s, None));
     let cells = ((nx + 2) * (ny + 2)) as f64;
-    // The in-place kernel (the CPU default without grains) holds one distribution buffer.
+    // The in-place kernel (the CPU default) holds one distribution buffer.
     let one = s.scene.run.backend == grainflow::scene::Backend::Cpu
         && grainflow::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
     let buffers = if one { 1.0 } else { 2.0 };

@@ -17,13 +17,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Whether the CPU lattice runs in place: asked for, or `auto` (it measured faster in f32
-/// and f64 alike), never with grains (asking for `in-place` with grains is refused in
-/// [`Simulation::new`]).
-pub fn in_place(kernel: Kernel, grains: bool) -> bool {
+/// and f64 alike, with grains or without; the same bits either way).
+pub fn in_place(kernel: Kernel, _grains: bool) -> bool {
     match kernel {
-        Kernel::InPlace => !grains,
+        Kernel::InPlace | Kernel::Auto => true,
         Kernel::TwoArray => false,
-        Kernel::Auto => !grains,
     }
 }
 
@@ -233,8 +231,8 @@ impl<T: Real> Simulation<T> {
         } else if kernel == Kernel::InPlace {
             return Err(invalid(
                 "kernel",
-                "the in-place kernel runs on the CPU backend and without grains (their coupling \
-                 reads the previous buffer): use kernel = \"two-array\" or \"auto\""
+                "the in-place kernel runs on the CPU backend: use kernel = \"two-array\" or \
+                 \"auto\" with the GPU backend"
                     .into(),
             )
             .into());

@@ -109,7 +109,7 @@ fn checkpoints_move_between_the_kernels() {
 }
 
 #[test]
-fn in_place_is_refused_with_grains() {
+fn in_place_is_refused_on_the_gpu() {
     let d = tempfile::tempdir().unwrap();
     let o = grainflow(
         1,
@@ -120,6 +120,8 @@ fn in_place_is_refused_with_grains() {
             d.path().join("g").to_str().unwrap(),
             "--kernel",
             "in-place",
+            "--backend",
+            "gpu",
             "--steps",
             "1",
         ],
@@ -127,7 +129,7 @@ fn in_place_is_refused_with_grains() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("`kernel`") && err.contains("without grains"),
+        err.contains("`kernel`") && err.contains("CPU backend"),
         "{err}"
     );
 }

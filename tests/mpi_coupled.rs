@@ -1,5 +1,6 @@
-//! Coupled fluid–grain runs with real `mpirun`: the same scene on 1, 2, 3 and 4 ranks
-//! gives bit-identical fields and grains (f64) for each interface scheme, with grains
+//! Coupled fluid–grain runs with real `mpirun`: the same scene on 1, 2, 3 and 4 ranks, with
+//! the in-place or the two-array kernel, gives bit-identical fields and grains (f64) for
+//! each interface scheme, with grains
 //! crossing rank faces, straddling them, colliding and repelling across them, and next to
 //! a periodic seam; a coupled checkpoint restarted on another rank count continues bit for
 //! bit. `cargo test --release --test mpi_coupled -- --nocapture` prints the runs.
@@ -21,7 +22,6 @@ fn with_scheme(scene: &str, scheme: &str, dir: &Path) -> String {
     path.to_str().unwrap().to_owned()
 }
 
-/// The scene on 1 rank and on each of `ranks`: identical fields, grains and summaries.
 /// The coupling stage's per-pass seconds are all reported and, on one rank, add up to no
 /// more than the stage itself (they are timed inside it).
 fn assert_passes_inside_the_stage(s: &serde_json::Value, scheme: &str) {
@@ -43,7 +43,10 @@ fn assert_passes_inside_the_stage(s: &serde_json::Value, scheme: &str) {
     );
 }
 
-fn rank_invariance(scene: &str, schemes: &[&str], ranks: &[usize]) {
+/// The scene on 1 rank and on each of `ranks` with the default (in-place) kernel, and with
+/// the two-array kernel on 1 rank and on `two_array_ranks`: identical fields, grains and
+/// summaries.
+fn rank_invariance(scene: &str, schemes: &[&str], ranks: &[usize], two_array_ranks: usize) {
     let d = tempfile::tempdir().unwrap();
     for scheme in schemes {
         let scene = with_scheme(scene, scheme, d.path());
@@ -51,6 +54,13 @@ fn rank_invariance(scene: &str, schemes: &[&str], ranks: &[usize]) {
         run_ok(1, &scene, &one, &[]);
         assert_eq!(summary(&one)["status"], "ok");
         assert_passes_inside_the_stage(&summary(&one), scheme);
+        for n in [1, two_array_ranks] {
+            let two = d.path().join(format!("{scheme}-two-array-np{n}"));
+            run_ok(n, &scene, &two, &["--kernel", "two-array"]);
+            assert_bit_identical(&one, &two);
+            assert_grains_identical(&one, &two);
+            eprintln!("{scheme}: the two-array kernel on {n} ranks matches in place bit for bit");
+        }
         for &n in ranks {
             let many = d.path().join(format!("{scheme}-np{n}"));
             run_ok(n, &scene, &many, &[]);
@@ -70,6 +80,7 @@ fn grains_crossing_rank_faces_are_bit_identical_on_1_to_4_ranks() {
         "tests/scenes/mpi_grains_box.toml",
         &["bounce-back", "interpolated", "psm"],
         &[2, 3, 4],
+        3,
     );
 }
 
@@ -81,6 +92,7 @@ fn grains_next_to_a_periodic_seam_are_bit_identical_on_1_to_3_ranks() {
         "tests/scenes/mpi_grains_periodic.toml",
         &["psm", "bounce-back"],
         &[2, 3],
+        2,
     );
 }
 

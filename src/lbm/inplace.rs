@@ -20,6 +20,7 @@ use super::collision::{with_collider, Collider};
 use super::d2q9::{CX, CY, MIRROR_X, MIRROR_Y, OPP, Q};
 use super::lanes::{has_avx512, prefetch_ahead, Lanes};
 use super::lattice::{Face, FaceCondition, Lattice, Layout, StepError, FLUID, HALO_DIRS};
+use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
 use decomposition::{Comm, Side};
 use rayon::prelude::*;
@@ -68,8 +69,7 @@ impl<T: Real> Lattice<T> {
 
     /// Hold the populations in one buffer from now on: half the memory, and no
     /// write-allocate traffic. The state is kept (the current buffer's post-collision values
-    /// move to the slots of the opposite direction, halos included). Not for lattices that
-    /// moving surfaces recompute after the sweep (grain coupling reads the previous buffer).
+    /// move to the slots of the opposite direction, halos included).
     pub fn make_in_place(&mut self) {
         if self.in_place() {
             return;
@@ -86,105 +86,227 @@ impl<T: Real> Lattice<T> {
         self.layout = Layout::Local;
     }
 
-    /// One in-place step (see the module docs). Collective when the slab has neighbours.
-    pub(crate) fn stream_collide_in_place(&mut self, comm: &dyn Comm) -> Result<(), StepError> {
+    /// One in-place step (see the module docs), recomputing the cells of moving surfaces in
+    /// `moving` (see [`super::moving`]): they are computed from the step's start state before
+    /// the sweep overwrites it, and stored over the sweep's values by the task that sweeps
+    /// their row. Returns the plan index and density of the first such cell that went bad.
+    /// Collective when the slab has neighbours.
+    pub(crate) fn stream_collide_in_place(
+        &mut self,
+        comm: &dyn Comm,
+        moving: &mut MovingCells<'_>,
+    ) -> Result<Option<(usize, f64)>, StepError> {
         if self.step == 0 {
             self.fill_halo();
         }
         let push = self.layout == Layout::Local;
+        if !push && self.redrain {
+            // Cells refilled since the last push step (a surface uncovered them): their
+            // values go to the slots their neighbours pull, as the last drain did.
+            self.drain(comm);
+        }
+        self.redrain = false;
+        let exchanged = |f: &FaceCondition| *f == FaceCondition::Exchange;
+        let edge = [
+            exchanged(&self.faces[0]).then_some(0),
+            exchanged(&self.faces[1]).then_some(self.nx - 1),
+        ];
+        let run = MovingRun::new(moving, edge);
+        let mut out = std::mem::take(&mut self.moving_out);
+        if let Some(r) = &run {
+            out.clear();
+            out.resize(Q * r.cells().len(), T::default());
+        }
+        let peers = self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some();
         // Open corners read their diagonal neighbour's values of the step's start, which the
         // sweep overwrites in place: taken first (the two-array kernel reads them untouched).
         self.corner_drho = Some(self.corner_drhos(self.access()));
         if push {
             // The neighbours' results into the halos, as the two-array kernel's, while the
-            // cells that do not read them are swept.
+            // cells that do not read them are swept. With moving surfaces the sweep waits:
+            // their cells next to the faces read both the halo and slots the sweep rewrites.
             self.pack_halo();
             let mut halo = std::mem::take(&mut self.halo);
-            let waited = halo.exchange(comm, &mut || self.sweep_in_place(true));
+            let waited = halo.exchange(comm, &mut || {
+                if run.is_none() {
+                    self.sweep_in_place(true, None, &mut out)
+                }
+            });
             self.halo = halo;
             self.halo_wait_s += waited;
-            if self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some() {
+            if peers {
                 self.unpack_halo();
-                self.sweep_in_place(false);
+            }
+            if let Some(r) = &run {
+                self.precompute_edge(r, &mut out);
+                self.sweep_in_place(true, Some(r), &mut out);
+            }
+            if peers {
+                self.sweep_in_place(false, run.as_ref(), &mut out);
             }
         } else {
-            self.sweep_in_place(true);
-            self.sweep_in_place(false);
+            if let Some(r) = &run {
+                self.precompute_edge(r, &mut out);
+            }
+            self.sweep_in_place(true, run.as_ref(), &mut out);
+            self.sweep_in_place(false, run.as_ref(), &mut out);
         }
+        self.moving_out = out;
         self.corner_drho = None;
         self.layout = if push { Layout::Pushed } else { Layout::Local };
+        // A moving-surface cell that went bad is the coupling's to report (it names the
+        // surface), before the sweep's rows that hold it.
+        let moving_bad = match &run {
+            Some(r) if comm.size() > 1 => comm.any(r.first_bad().is_some()),
+            Some(r) => r.first_bad().is_some(),
+            None => false,
+        };
         let bad_row = self.row_bad.iter().position(|&b| b != 0);
-        if comm.size() > 1 {
-            if comm.any(bad_row.is_some()) {
-                return Err(self.agree_on_instability(comm, bad_row));
+        if !moving_bad {
+            if comm.size() > 1 {
+                if comm.any(bad_row.is_some()) {
+                    return Err(self.agree_on_instability(comm, bad_row));
+                }
+            } else if let Some(y) = bad_row {
+                return Err(self.locate_instability(y));
             }
-        } else if let Some(y) = bad_row {
-            return Err(self.locate_instability(y));
         }
         if push {
             self.drain(comm);
+            self.redrain = run.is_some();
         }
         self.step += 1;
-        Ok(())
+        Ok(run.and_then(|r| {
+            let n = r.first_bad()?;
+            Some((n, self.density_at(r.cells()[n] as usize)))
+        }))
+    }
+
+    /// Compute the moving-surface cells of `run` on the exchanged edge columns into `out`
+    /// before the sweep (the others are computed by the sweep, just ahead of it).
+    fn precompute_edge(&mut self, run: &MovingRun<'_>, out: &mut [T]) {
+        if !self.exchanged_faces().contains(&true) {
+            return;
+        }
+        let (base, acc) = (Shared(self.buf[0].as_mut_ptr()), self.access());
+        let out = Shared(out.as_mut_ptr());
+        let this = &*self;
+        with_collider!(this.collision, this.smagorinsky, this.params, |c| {
+            (0..this.ny).into_par_iter().with_min_len(64).for_each(|y| {
+                // SAFETY: no cell has been swept yet; each row's plan cells have their own
+                // slots and values in `out` (sized by the caller).
+                unsafe { run.precompute_row(this, c, base.ptr(), acc, out.ptr(), y, true) }
+            });
+        });
     }
 
     /// One parallel pass over the rows: bulk and special cells (`inner`), or the cells next
-    /// to exchanged faces.
-    fn sweep_in_place(&mut self, inner: bool) {
+    /// to exchanged faces; then the row's moving-surface cells of `moving` take their
+    /// values in `out` (computed ahead of the sweep in the inner pass).
+    fn sweep_in_place(&mut self, inner: bool, moving: Option<&MovingRun<'_>>, out: &mut [T]) {
         with_collider!(self.collision, self.smagorinsky, self.params, |c| self
-            .sweep_aa(c, inner));
+            .sweep_aa(c, inner, moving, out));
     }
 
-    fn sweep_aa<C: Collider<T>>(&mut self, c: &C, inner: bool) {
+    fn sweep_aa<C: Collider<T>>(
+        &mut self,
+        c: &C,
+        inner: bool,
+        moving: Option<&MovingRun<'_>>,
+        out: &mut [T],
+    ) {
         let acc = self.access();
         let base = Shared(self.buf[0].as_mut_ptr());
+        let outp = Shared(out.as_mut_ptr());
         let ns = self.forces.solids();
         let mut slot_values = std::mem::take(&mut self.forces.values);
         let slots = Shared(slot_values.as_mut_ptr());
         let mut row_bad = std::mem::take(&mut self.row_bad);
         let this = &*self;
         let bulk = bulk_kernel::<T, C>();
-        row_bad
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(if inner { 4 } else { 64 })
-            .for_each(|(y, bad)| {
-                let row = &this.plan[y];
-                let mut b = false;
-                let yp = y + 1;
-                let (cells, first_slot) = if inner {
-                    for &(x0, x1) in &row.bulk {
-                        let k0 = yp * this.stride + x0 as usize + 1;
-                        // SAFETY: the run's cells are this task's; each reads and writes only
-                        // its own nine slots.
-                        b |= unsafe { bulk(c, base.ptr(), acc, k0, (x1 - x0) as usize) };
-                    }
-                    (&row.special, this.forces.row_start[y])
-                } else {
-                    (&row.edge, this.forces.row_start[y] + row.special.len())
+        let sweep_row = |y: usize, bad: &mut u8| {
+            let row = &this.plan[y];
+            let mut b = false;
+            let yp = y + 1;
+            let (cells, first_slot) = if inner {
+                for &(x0, x1) in &row.bulk {
+                    let k0 = yp * this.stride + x0 as usize + 1;
+                    // SAFETY: the run's cells are this task's; each reads and writes only
+                    // its own nine slots.
+                    b |= unsafe { bulk(c, base.ptr(), acc, k0, (x1 - x0) as usize) };
+                }
+                (&row.special, this.forces.row_start[y])
+            } else {
+                (&row.edge, this.forces.row_start[y] + row.special.len())
+            };
+            for (j, &x) in cells.iter().enumerate() {
+                // SAFETY: the slots of this row's cells belong to this task only.
+                let f = unsafe {
+                    std::slice::from_raw_parts_mut(slots.ptr().add((first_slot + j) * ns), ns)
                 };
-                for (j, &x) in cells.iter().enumerate() {
-                    // SAFETY: the slots of this row's cells belong to this task only.
-                    let f = unsafe {
-                        std::slice::from_raw_parts_mut(slots.ptr().add((first_slot + j) * ns), ns)
-                    };
-                    f.fill([0.0; 2]);
-                    let src = Src(base.ptr() as *const T);
-                    let mut h = this.gather_special(src, acc, x as usize, y, Some(f));
-                    let m = c.collide(&mut h);
-                    let k = yp * this.stride + x as usize + 1;
-                    for (i, hi) in h.iter().enumerate() {
-                        // SAFETY: the cell's own slots (see the module docs).
-                        unsafe { *base.ptr().add(acc.store(i, k)) = *hi };
+                f.fill([0.0; 2]);
+                let src = Src(base.ptr() as *const T);
+                let mut h = this.gather_special(src, acc, x as usize, y, Some(f));
+                let m = c.collide(&mut h);
+                let k = yp * this.stride + x as usize + 1;
+                for (i, hi) in h.iter().enumerate() {
+                    // SAFETY: the cell's own slots (see the module docs).
+                    unsafe { *base.ptr().add(acc.store(i, k)) = *hi };
+                }
+                b |= !(m.rho > T::default());
+            }
+            if let Some(run) = moving {
+                // SAFETY: the slots of this row's cells belong to this task, and their
+                // values in `out` were computed before.
+                unsafe { run.finish_row(this, outp.ptr(), base.ptr(), acc, y, !inner) };
+            }
+            if inner {
+                *bad = b as u8;
+            } else {
+                *bad |= b as u8;
+            }
+        };
+        match moving.filter(|_| inner) {
+            None => row_bad
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(if inner { 4 } else { 64 })
+                .for_each(|(y, bad)| sweep_row(y, bad)),
+            Some(run) => {
+                // A moving-surface cell reads slots of the rows next to it that the sweep
+                // rewrites, so it is computed before them: each task sweeps a band of rows
+                // in order and computes row y + 1's cells just before sweeping row y (the
+                // data then in cache); the bands' first and last rows are computed first.
+                // SAFETY (both closures): rows y − 1..=y + 1 are not yet swept when row y
+                // is computed, and each row's values in `out` are written by one task.
+                let compute = |y: usize| unsafe {
+                    run.precompute_row(this, c, base.ptr(), acc, outp.ptr(), y, false)
+                };
+                let ny = this.ny;
+                let band = (ny / (4 * rayon::current_num_threads())).clamp(8, 64);
+                (0..ny.div_ceil(band)).into_par_iter().for_each(|b| {
+                    let (a, e) = (b * band, ((b + 1) * band).min(ny));
+                    compute(a);
+                    if e - 1 > a {
+                        compute(e - 1);
                     }
-                    b |= !(m.rho > T::default());
-                }
-                if inner {
-                    *bad = b as u8;
-                } else {
-                    *bad |= b as u8;
-                }
-            });
+                });
+                row_bad
+                    .par_chunks_mut(band)
+                    .enumerate()
+                    .for_each(|(b, bads)| {
+                        let (a, e) = (b * band, b * band + bads.len());
+                        for (j, bad) in bads.iter_mut().enumerate() {
+                            let y = a + j;
+                            run.prefetch_row(this, base.ptr() as *const T, y + 2);
+                            if y + 2 < e {
+                                compute(y + 1);
+                            }
+                            sweep_row(y, bad);
+                        }
+                    });
+            }
+        }
         self.row_bad = row_bad;
         self.forces.values = slot_values;
     }

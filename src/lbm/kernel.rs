@@ -75,11 +75,7 @@ impl<T: Real> Lattice<T> {
         moving: &mut MovingCells<'_>,
     ) -> Result<Option<(usize, f64)>, StepError> {
         if self.in_place() {
-            assert!(
-                matches!(moving, MovingCells::None),
-                "moving surfaces need the two-array kernel"
-            );
-            return self.stream_collide_in_place(comm).map(|_| None);
+            return self.stream_collide_in_place(comm, moving);
         }
         if self.step == 0 {
             self.fill_halo();
@@ -157,6 +153,10 @@ impl<T: Real> Lattice<T> {
     pub fn refresh_exchange_full(&mut self, comm: &dyn Comm) {
         let peers = [Side::Left, Side::Right].map(|s| self.halo.peer(s).is_some());
         if !peers[0] && !peers[1] {
+            return;
+        }
+        if self.in_place() {
+            self.refresh_exchange_full_in_place(comm);
             return;
         }
         let (nx, stride, plane, rows) = (self.nx, self.stride, self.plane, self.ny + 2);

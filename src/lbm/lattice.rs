@@ -202,6 +202,15 @@ pub struct Lattice<T: Real> {
     /// start (W–S, E–S, E–N, W–N), read before the sweep overwrites its slots. None otherwise
     /// (the two-array kernel reads the untouched source buffer).
     pub(crate) corner_drho: Option<[T; 4]>,
+    /// In place, with moving surfaces: their cells' new values, computed before the sweep.
+    pub(crate) moving_out: Vec<T>,
+    /// In place: the last push step ran with moving surfaces, whose refills the next step
+    /// must drain again.
+    pub(crate) redrain: bool,
+    /// In place: all nine post-collision values of the neighbours' edge columns (west,
+    /// east; direction-major over the padded rows), from the last
+    /// [`Lattice::refresh_exchange_full`].
+    pub(crate) full_halo: [Vec<T>; 2],
 }
 
 /// Populations that cross one x face: 3 of the 9.
@@ -337,6 +346,9 @@ impl<T: Real> Lattice<T> {
             layout: Layout::TwoArray,
             drain_plan: None,
             corner_drho: None,
+            moving_out: Vec::new(),
+            redrain: false,
+            full_halo: [Vec::new(), Vec::new()],
         }
     }
 

@@ -23,6 +23,7 @@ pub mod lattice;
 pub mod moving;
 pub mod population_bgk;
 pub mod real;
+mod whole_cells;
 
 pub use backend::FluidBackend;
 pub use collision::{Collision, CollisionParams};

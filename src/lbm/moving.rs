@@ -12,11 +12,11 @@
 //! * [`Refill`]: a cell a surface has just uncovered, rebuilt from its fluid neighbours.
 //! * rest fills (equilibrium at ρ = 1 and a given velocity) and cell momenta.
 
+use super::boundary::{Access, Src};
 use super::collision::{equilibrium, Collider, Moments};
 use super::d2q9::{CX, CY, OPP, Q};
-use super::lattice::{is_plain, Lattice};
+use super::lattice::{is_plain, Lattice, Layout};
 use super::real::Real;
-use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// One link of a fluid cell to a moving surface: population `dir` enters the cell from its
@@ -114,7 +114,7 @@ pub struct Refill {
 
 /// A raw pointer shared by rayon tasks that write disjoint elements.
 #[derive(Clone, Copy)]
-struct Disjoint<T>(*mut T);
+pub(crate) struct Disjoint<T>(pub(crate) *mut T);
 // SAFETY: every task writes elements no other task touches (see each use).
 unsafe impl<T> Send for Disjoint<T> {}
 unsafe impl<T> Sync for Disjoint<T> {}
@@ -125,7 +125,7 @@ impl<T> Disjoint<T> {
     /// # Safety
     /// `i` is in bounds and no other task reads or writes it during the parallel pass.
     #[inline(always)]
-    unsafe fn write(&self, i: usize, v: T) {
+    pub(crate) unsafe fn write(&self, i: usize, v: T) {
         *self.0.add(i) = v;
     }
 }
@@ -220,27 +220,177 @@ impl<'a> MovingRun<'a> {
         y: usize,
         edge_pass: bool,
     ) {
+        let (src, acc) = (
+            Src::of(src),
+            Access::new(Layout::TwoArray, lat.plane, lat.stride),
+        );
+        let dst = Disjoint(dst);
+        for n in self.row_cells(lat, y, edge_pass) {
+            let (h, ok) = self.cell(lat, c, src, acc, n);
+            let k = self.cells()[n] as usize;
+            for (i, v) in h.iter().enumerate() {
+                dst.write(i * lat.plane + k, *v);
+            }
+            if !ok {
+                self.bad.fetch_min(n, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// In place, before the sweep overwrites the values they read: prepare the plan's
+    /// cells of row `y` (on the exchanged edge columns when `edge_pass`, the others
+    /// otherwise) from the step's start state in `base`, read through `acc`. A link cell gets
+    /// its bounced-back populations in the slots it pulls them from (where the sweep then
+    /// collides them with the rest of its row); a partially saturated cell is computed
+    /// whole into `out` (Q values per plan cell, in plan order), for
+    /// [`MovingRun::finish_row`]. The same values as [`MovingRun::row`] from two arrays.
+    ///
+    /// # Safety
+    /// Nothing has yet written the slots of rows y − 1 to y + 1 in this step; `out` holds Q
+    /// values per plan cell of a partially saturated plan, and those of row `y`'s cells
+    /// belong to the calling task.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) unsafe fn precompute_row<T: Real, C: Collider<T>>(
+        &self,
+        lat: &Lattice<T>,
+        c: &C,
+        base: *mut T,
+        acc: Access,
+        out: *mut T,
+        y: usize,
+        edge_pass: bool,
+    ) {
+        let src = Src(base as *const T);
+        for n in self.row_cells(lat, y, edge_pass) {
+            match &self.kind {
+                RunKind::Links(p, m) => {
+                    let k = p.cells[n] as usize;
+                    // Only cell k reads these slots (its pulled populations from the
+                    // covered neighbours), and only when it is swept.
+                    bounce_links(lat, src, acc, p, *m, n, |i, v| {
+                        *base.add(acc.pulled(i, k)) = v
+                    });
+                }
+                RunKind::Partial(p, m) => {
+                    let (h, ok) = partial_cell(lat, c, src, acc, p, *m, n);
+                    std::ptr::copy_nonoverlapping(h.as_ptr(), out.add(n * Q), Q);
+                    if !ok {
+                        self.bad.fetch_min(n, Ordering::Relaxed);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Ask for the cache lines that computing row `y`'s plan cells will read (each cell's
+    /// column in rows y − 1 to y + 1 of every direction's plane of `base`): these cells
+    /// are scattered, so the hardware's stream prefetchers do not fetch them.
+    pub(crate) fn prefetch_row<T: Real>(&self, lat: &Lattice<T>, base: *const T, y: usize) {
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (lat, base, y);
+        #[cfg(target_arch = "x86_64")]
+        {
+            let (rows, cells) = match &self.kind {
+                RunKind::Links(p, _) => (&p.rows, &p.cells),
+                RunKind::Partial(p, _) => (&p.rows, &p.cells),
+            };
+            if rows.is_empty() || y >= lat.ny {
+                return;
+            }
+            for &k in &cells[rows[y] as usize..rows[y + 1] as usize] {
+                for i in 0..Q {
+                    for dy in [-1isize, 0, 1] {
+                        let at = (i * lat.plane + k as usize) as isize + dy * lat.stride as isize;
+                        // SAFETY: a prefetch is a hint; it does not access memory
+                        // architecturally.
+                        unsafe {
+                            std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+                                base.wrapping_offset(at) as *const i8,
+                            )
+                        };
+                    }
+                }
+            }
+        }
+    }
+
+    /// In place, in the task that has just swept row `y`, for the row's plan cells (edge
+    /// columns or not, as `edge_pass`): a partially saturated cell takes its values in
+    /// `out` (from [`MovingRun::precompute_row`]) where the sweep stored its own
+    /// (`acc.store`); a link cell's density is checked.
+    ///
+    /// # Safety
+    /// `base` is the lattice's one buffer; the slots of row `y`'s cells belong to the
+    /// calling task; `out` holds the row's precomputed values.
+    pub(crate) unsafe fn finish_row<T: Real>(
+        &self,
+        lat: &Lattice<T>,
+        out: *const T,
+        base: *mut T,
+        acc: Access,
+        y: usize,
+        edge_pass: bool,
+    ) {
+        let links = matches!(self.kind, RunKind::Links(..));
+        for n in self.row_cells(lat, y, edge_pass) {
+            let k = self.cells()[n] as usize;
+            if links {
+                let rho = 1.0
+                    + (0..Q)
+                        .map(|j| (*base.add(acc.store(j, k))).to_f64())
+                        .sum::<f64>();
+                if !(rho > 0.0) {
+                    self.bad.fetch_min(n, Ordering::Relaxed);
+                }
+                continue;
+            }
+            for j in 0..Q {
+                *base.add(acc.store(j, k)) = *out.add(n * Q + j);
+            }
+        }
+    }
+
+    /// Plan indices of row `y`'s cells off the exchanged edge columns (`edge_pass = false`)
+    /// or on them.
+    #[inline]
+    fn row_cells<'s, T: Real>(
+        &'s self,
+        lat: &Lattice<T>,
+        y: usize,
+        edge_pass: bool,
+    ) -> impl Iterator<Item = usize> + 's {
         let (rows, cells) = match &self.kind {
             RunKind::Links(p, _) => (&p.rows, &p.cells),
             RunKind::Partial(p, _) => (&p.rows, &p.cells),
         };
-        if rows.is_empty() {
-            return;
-        }
-        let dst = Disjoint(dst);
-        for n in rows[y] as usize..rows[y + 1] as usize {
-            let k = cells[n] as usize;
-            let x = k % lat.stride - 1;
-            if self.edge.contains(&Some(x)) != edge_pass {
-                continue;
-            }
-            let ok = match &self.kind {
-                RunKind::Links(p, m) => link_cell(lat, c, src, dst, p, *m, n),
-                RunKind::Partial(p, m) => partial_cell(lat, c, src, dst, p, *m, n),
-            };
-            if !ok {
-                self.bad.fetch_min(n, Ordering::Relaxed);
-            }
+        let range = if rows.is_empty() {
+            0..0
+        } else {
+            rows[y] as usize..rows[y + 1] as usize
+        };
+        let stride = lat.stride;
+        range.filter(move |&n| {
+            let x = cells[n] as usize % stride - 1;
+            self.edge.contains(&Some(x)) == edge_pass
+        })
+    }
+
+    /// The new values of plan cell `n` and whether its density stayed positive.
+    ///
+    /// # Safety
+    /// As [`MovingRun::row`]: the momentum slots of cell `n` belong to the caller.
+    #[inline]
+    unsafe fn cell<T: Real, C: Collider<T>>(
+        &self,
+        lat: &Lattice<T>,
+        c: &C,
+        src: Src<T>,
+        acc: Access,
+        n: usize,
+    ) -> ([T; Q], bool) {
+        match &self.kind {
+            RunKind::Links(p, m) => link_cell(lat, c, src, acc, p, *m, n),
+            RunKind::Partial(p, m) => partial_cell(lat, c, src, acc, p, *m, n),
         }
     }
 
@@ -259,25 +409,21 @@ impl<'a> MovingRun<'a> {
     }
 }
 
-/// Pre-collision populations of interior fluid cell `k` (padded) pulled from `src`: a plain
-/// pull where every neighbour is plain fluid, the lattice's own wall and open-face rules
-/// otherwise.
+/// Pre-collision populations of interior fluid cell `k` (padded) pulled from `src` (read
+/// through `acc`): a plain pull where every neighbour is plain fluid, the lattice's own wall
+/// and open-face rules otherwise.
 #[inline]
-fn pull<T: Real>(lat: &Lattice<T>, src: &[T], k: usize) -> [T; Q] {
+fn pull<T: Real>(lat: &Lattice<T>, src: Src<T>, acc: Access, k: usize) -> [T; Q] {
     if is_plain(&lat.types, lat.stride, k) {
-        let s = lat.stride as isize;
-        std::array::from_fn(|i| {
-            src[i * lat.plane + (k as isize - CX[i] as isize - CY[i] as isize * s) as usize]
-        })
+        std::array::from_fn(|i| src.get(acc.pulled(i, k)))
     } else {
         let (x, y) = (k % lat.stride - 1, k / lat.stride - 1);
-        let acc =
-            super::boundary::Access::new(super::lattice::Layout::TwoArray, lat.plane, lat.stride);
-        lat.gather_special(super::boundary::Src::of(src), acc, x, y, None)
+        lat.gather_special(src, acc, x, y, None)
     }
 }
 
-/// Recompute link-plan cell `n`; false when its density went NaN or non-positive.
+/// The new values of link-plan cell `n` (its links bounced back, then collided) and whether
+/// its density stayed positive.
 ///
 /// # Safety
 /// As [`MovingRun::row`]; the link slots of cell `n` belong to the caller.
@@ -285,21 +431,42 @@ fn pull<T: Real>(lat: &Lattice<T>, src: &[T], k: usize) -> [T; Q] {
 unsafe fn link_cell<T: Real, C: Collider<T>>(
     lat: &Lattice<T>,
     c: &C,
-    src: &[T],
-    dst: Disjoint<T>,
+    src: Src<T>,
+    acc: Access,
     plan: &LinkPlan,
     mom: Disjoint<f64>,
     n: usize,
-) -> bool {
-    let (plane, k) = (lat.plane, plan.cells[n] as usize);
-    let mut h = pull(lat, src, k);
+) -> ([T; Q], bool) {
+    let mut h = pull(lat, src, acc, plan.cells[n] as usize);
+    bounce_links(lat, src, acc, plan, mom, n, |i, v| h[i] = v);
+    let m = c.collide(&mut h);
+    (h, m.rho > T::default())
+}
+
+/// The populations that enter link-plan cell `n` from the surface, one call `set(i, h_i)`
+/// per link (in the lattice's precision), each link's momentum f*_ī + h_i recorded.
+/// Reads only slots of the cell's neighbours and the cell's own non-link slots.
+///
+/// # Safety
+/// As [`MovingRun::row`]; the link slots of cell `n` belong to the caller.
+#[inline]
+unsafe fn bounce_links<T: Real>(
+    lat: &Lattice<T>,
+    src: Src<T>,
+    acc: Access,
+    plan: &LinkPlan,
+    mom: Disjoint<f64>,
+    n: usize,
+    mut set: impl FnMut(usize, T),
+) {
+    let k = plan.cells[n] as usize;
     let first = plan.start[n] as usize;
     for (l, link) in plan.links[first..plan.start[n + 1] as usize]
         .iter()
         .enumerate()
     {
         let i = link.dir as usize;
-        let out_i = src[OPP[i] * plane + k].to_f64();
+        let out_i = src.get(acc.own(OPP[i], k)).to_f64();
         let q = link.q;
         let hi = if q == 0.5 {
             // Half-way bounce-back on a moving wall (Ladd 1994, eq. 3.3).
@@ -307,24 +474,20 @@ unsafe fn link_cell<T: Real, C: Collider<T>>(
         } else if q < 0.5 {
             // Bouzidi, Firdaouss & Lallemand 2001, eq. 5 (q < ½), moving wall.
             let ff = (k as isize + CX[i] as isize + CY[i] as isize * lat.stride as isize) as usize;
-            2.0 * q * out_i + (1.0 - 2.0 * q) * src[OPP[i] * plane + ff].to_f64() + link.wall
+            2.0 * q * out_i + (1.0 - 2.0 * q) * src.get(acc.own(OPP[i], ff)).to_f64() + link.wall
         } else {
             // Bouzidi et al. 2001, eq. 5 (q ≥ ½).
-            let same = src[i * plane + k].to_f64();
+            let same = src.get(acc.own(i, k)).to_f64();
             (out_i + (2.0 * q - 1.0) * same + link.wall) / (2.0 * q)
         };
-        h[i] = T::from_f64(hi);
-        mom.write(first + l, out_i + h[i].to_f64());
+        let v = T::from_f64(hi);
+        set(i, v);
+        mom.write(first + l, out_i + v.to_f64());
     }
-    let m = c.collide(&mut h);
-    for (i, v) in h.iter().enumerate() {
-        dst.write(i * plane + k, *v);
-    }
-    m.rho > T::default()
 }
 
-/// Recompute partially saturated plan cell `n`; false when its density went NaN or
-/// non-positive.
+/// The new values of partially saturated plan cell `n` and whether its density stayed
+/// positive.
 ///
 /// # Safety
 /// As [`MovingRun::row`]; the share slots of cell `n` belong to the caller.
@@ -332,14 +495,13 @@ unsafe fn link_cell<T: Real, C: Collider<T>>(
 unsafe fn partial_cell<T: Real, C: Collider<T>>(
     lat: &Lattice<T>,
     c: &C,
-    src: &[T],
-    dst: Disjoint<T>,
+    src: Src<T>,
+    acc: Access,
     plan: &PsmPlan,
     mom: Disjoint<[f64; 2]>,
     n: usize,
-) -> bool {
-    let (plane, k) = (lat.plane, plan.cells[n] as usize);
-    let h = pull(lat, src, k);
+) -> ([T; Q], bool) {
+    let h = pull(lat, src, acc, plan.cells[n] as usize);
     let hf: [f64; Q] = h.map(|v| v.to_f64());
     let b_total = plan.total[n];
     let mut post = h;
@@ -375,69 +537,7 @@ unsafe fn partial_cell<T: Real, C: Collider<T>>(
         mom.write(first + s, [-p[0], -p[1]]);
     }
     let rho = 1.0 + new.iter().sum::<f64>();
-    for (i, v) in new.iter().enumerate() {
-        dst.write(i * plane + k, T::from_f64(*v));
-    }
-    rho > 0.0
-}
-
-impl<T: Real> Lattice<T> {
-    /// Density of padded cell `k` in the current state.
-    pub(crate) fn density_at(&self, k: usize) -> f64 {
-        let buf = self.current_buffer();
-        1.0 + (0..Q)
-            .map(|i| buf[i * self.plane + k].to_f64())
-            .sum::<f64>()
-    }
-
-    /// Set each of `cells` (padded, each at most once) in the current buffer to the
-    /// equilibrium at ρ = 1 and the matching velocity (the fluid at rest inside a solid).
-    pub fn set_rest(&mut self, cells: &[u32], velocity: &[[f64; 2]]) {
-        let plane = self.plane;
-        let buf = Disjoint(self.buf[self.cur].as_mut_ptr());
-        cells
-            .par_iter()
-            .zip(velocity.par_iter())
-            .with_min_len(1024)
-            .for_each(|(&k, &u)| {
-                let eq = equilibrium_at(0.0, u);
-                for (i, v) in eq.iter().enumerate() {
-                    // SAFETY: each cell is listed once.
-                    unsafe { buf.write(i * plane + k as usize, T::from_f64(*v)) };
-                }
-            });
-    }
-
-    /// Σ h_i c_i of each of `cells` (padded) in the current buffer.
-    pub fn momentum_of_cells(&self, cells: &[u32], out: &mut Vec<[f64; 2]>) {
-        let buf = self.current_buffer();
-        out.clear();
-        out.extend(cells.iter().map(|&k| {
-            let h: [f64; Q] = std::array::from_fn(|i| buf[i * self.plane + k as usize].to_f64());
-            momentum_of(&h)
-        }));
-    }
-
-    /// Rebuild each cell of `refills` as [`refill_cell`] says. `momentum[r]` receives
-    /// Σ h_i c_i of the new cell. Precondition: no refilled cell is a listed neighbour of
-    /// another.
-    pub fn apply_refills(&mut self, refills: &[Refill], momentum: &mut Vec<[f64; 2]>) {
-        let (plane, stride) = (self.plane, self.stride);
-        momentum.clear();
-        let buf = &mut self.buf[self.cur];
-        for r in refills {
-            let h = refill_cell(r, stride, |m| {
-                std::array::from_fn(|j| buf[j * plane + m].to_f64())
-            });
-            let mut stored = [0.0; Q];
-            for i in 0..Q {
-                let v = T::from_f64(h[i]);
-                buf[i * plane + r.cell as usize] = v;
-                stored[i] = v.to_f64();
-            }
-            momentum.push(momentum_of(&stored));
-        }
-    }
+    (new.map(T::from_f64), rho > 0.0)
 }
 
 /// The padded cells a refill reads: its listed neighbours and the extrapolation source.
