@@ -155,12 +155,14 @@ pub fn moments<T: Real>(h: &[T; Q], force: [T; 2]) -> Moments<T> {
 /// Shifted equilibrium h_i^eq = w_i [δρ + ρ(3 c·u + 4.5 (c·u)² − 1.5 u²)] (Qian et al. 1992).
 /// Used for initial conditions and as the reference in tests (the kernels fold it into their
 /// relaxation).
-pub fn equilibrium<T: Real>(m: &Moments<T>) -> [T; Q] {
+#[inline(always)]
+pub fn equilibrium<V: Simd>(m: &Moments<V>) -> [V; Q] {
+    let s = |v: f64| V::splat(V::Scalar::from_f64(v));
     let usq = m.ux * m.ux + m.uy * m.uy;
     std::array::from_fn(|i| {
-        let cu = T::from_f64(CX[i] as f64) * m.ux + T::from_f64(CY[i] as f64) * m.uy;
-        let poly = T::from_f64(3.0) * cu + T::from_f64(4.5) * cu * cu - T::from_f64(1.5) * usq;
-        T::from_f64(W[i]) * (m.drho + m.rho * poly)
+        let cu = s(CX[i] as f64) * m.ux + s(CY[i] as f64) * m.uy;
+        let poly = s(3.0) * cu + s(4.5) * cu * cu - s(1.5) * usq;
+        s(W[i]) * (m.drho + m.rho * poly)
     })
 }
 

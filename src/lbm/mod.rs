@@ -21,6 +21,7 @@ pub mod kernel;
 pub mod lanes;
 pub mod lattice;
 pub mod moving;
+mod partial_lanes;
 pub mod population_bgk;
 pub mod real;
 mod whole_cells;

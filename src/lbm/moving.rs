@@ -16,6 +16,7 @@ use super::boundary::{Access, Src};
 use super::collision::{equilibrium, Collider, Moments};
 use super::d2q9::{CX, CY, OPP, Q};
 use super::lattice::{is_plain, Lattice, Layout};
+use super::partial_lanes::{partial_cells, LANES};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -261,23 +262,46 @@ impl<'a> MovingRun<'a> {
         edge_pass: bool,
     ) {
         let src = Src(base as *const T);
-        for n in self.row_cells(lat, y, edge_pass) {
-            match &self.kind {
-                RunKind::Links(p, m) => {
-                    let k = p.cells[n] as usize;
-                    // Only cell k reads these slots (its pulled populations from the
-                    // covered neighbours), and only when it is swept.
-                    bounce_links(lat, src, acc, p, *m, n, |i, v| {
-                        *base.add(acc.pulled(i, k)) = v
-                    });
+        if let RunKind::Partial(p, m) = &self.kind {
+            // Single-share cells eight at a time, the others one by one.
+            let mut batch = [0usize; LANES];
+            let mut filled = 0;
+            let store = |n: usize, h: &[T; Q], ok: bool| {
+                std::ptr::copy_nonoverlapping(h.as_ptr(), out.add(n * Q), Q);
+                if !ok {
+                    self.bad.fetch_min(n, Ordering::Relaxed);
                 }
-                RunKind::Partial(p, m) => {
+            };
+            for n in self.row_cells(lat, y, edge_pass) {
+                if p.start[n + 1] - p.start[n] != 1 {
                     let (h, ok) = partial_cell(lat, c, src, acc, p, *m, n);
-                    std::ptr::copy_nonoverlapping(h.as_ptr(), out.add(n * Q), Q);
-                    if !ok {
-                        self.bad.fetch_min(n, Ordering::Relaxed);
-                    }
+                    store(n, &h, ok);
+                    continue;
                 }
+                batch[filled] = n;
+                filled += 1;
+                if filled == LANES {
+                    let (hs, oks) = partial_cells(lat, c, src, acc, p, *m, &batch);
+                    for l in 0..LANES {
+                        store(batch[l], &hs[l], oks[l]);
+                    }
+                    filled = 0;
+                }
+            }
+            for &n in &batch[..filled] {
+                let (h, ok) = partial_cell(lat, c, src, acc, p, *m, n);
+                store(n, &h, ok);
+            }
+            return;
+        }
+        if let RunKind::Links(p, m) = &self.kind {
+            for n in self.row_cells(lat, y, edge_pass) {
+                let k = p.cells[n] as usize;
+                // Only cell k reads these slots (its pulled populations from the covered
+                // cells), and only when it is swept.
+                bounce_links(lat, src, acc, p, *m, n, |i, v| {
+                    *base.add(acc.pulled(i, k)) = v
+                });
             }
         }
     }
@@ -412,8 +436,8 @@ impl<'a> MovingRun<'a> {
 /// Pre-collision populations of interior fluid cell `k` (padded) pulled from `src` (read
 /// through `acc`): a plain pull where every neighbour is plain fluid, the lattice's own wall
 /// and open-face rules otherwise.
-#[inline]
-fn pull<T: Real>(lat: &Lattice<T>, src: Src<T>, acc: Access, k: usize) -> [T; Q] {
+#[inline(always)]
+pub(crate) fn pull<T: Real>(lat: &Lattice<T>, src: Src<T>, acc: Access, k: usize) -> [T; Q] {
     if is_plain(&lat.types, lat.stride, k) {
         std::array::from_fn(|i| src.get(acc.pulled(i, k)))
     } else {
@@ -492,7 +516,7 @@ unsafe fn bounce_links<T: Real>(
 /// # Safety
 /// As [`MovingRun::row`]; the share slots of cell `n` belong to the caller.
 #[inline]
-unsafe fn partial_cell<T: Real, C: Collider<T>>(
+pub(crate) unsafe fn partial_cell<T: Real, C: Collider<T>>(
     lat: &Lattice<T>,
     c: &C,
     src: Src<T>,
