@@ -29,7 +29,7 @@ use rayon::prelude::*;
 const WESTWARD: [usize; HALO_DIRS] = [3, 6, 7];
 const EASTWARD: [usize; HALO_DIRS] = [1, 5, 8];
 /// "No slot": the halo value is zero (faces whose halo the two-array kernel leaves empty).
-const NONE: usize = usize::MAX;
+pub(crate) const NONE: usize = usize::MAX;
 
 /// What [`Lattice::drain`] copies after every push step: the indices are fixed by the
 /// geometry, so they are found once (the first drain) and the step only gathers.
@@ -413,7 +413,7 @@ impl<T: Real> Lattice<T> {
     /// result, or the face rules applied to one (x faces for the interior rows, y faces over
     /// the full padded width, as `fill_halo` orders them; exchanged faces from the halo slots
     /// the neighbour filled).
-    fn halo_index(&self, x: i64, y: i64, s: usize) -> usize {
+    pub(crate) fn halo_index(&self, x: i64, y: i64, s: usize) -> usize {
         let (nx, ny) = (self.nx as i64, self.ny as i64);
         let inside_x = (0..nx).contains(&x);
         let inside_y = (0..ny).contains(&y);

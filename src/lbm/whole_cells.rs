@@ -9,7 +9,7 @@
 //! (periodic, free-slip, outflow), and across rank faces taken from the neighbours' edge
 //! columns exchanged by [`Lattice::refresh_exchange_full`].
 
-use super::d2q9::{MIRROR_X, MIRROR_Y, Q};
+use super::d2q9::Q;
 use super::lattice::{Face, FaceCondition, Lattice};
 use super::moving::{equilibrium_at, momentum_of, refill_cell, Disjoint, Refill};
 use super::real::Real;
@@ -89,13 +89,9 @@ impl<T: Real> Lattice<T> {
     /// then the x faces' (as `fill_halo` composes them at the corners), rank faces from the
     /// last full exchange; zero for wall and open halos, which are never read as fluid.
     fn own_anywhere(&self, x: i64, y: i64, s: usize) -> T {
-        let (nx, ny) = (self.nx as i64, self.ny as i64);
-        let (inside_x, inside_y) = ((0..nx).contains(&x), (0..ny).contains(&y));
-        if inside_x && inside_y {
-            return self.buf[0][self.access().own(s, self.idx(x as isize, y as isize))];
-        }
+        let outside_x = x < 0 || x >= self.nx as i64;
         let x_face = if x < 0 { Face::West } else { Face::East };
-        if !inside_x && self.faces[x_face as usize] == FaceCondition::Exchange {
+        if outside_x && self.faces[x_face as usize] == FaceCondition::Exchange {
             let side = (x >= 0) as usize;
             let rows = self.ny + 2;
             return self.full_halo[side]
@@ -103,25 +99,11 @@ impl<T: Real> Lattice<T> {
                 .copied()
                 .unwrap_or_default();
         }
-        if !inside_y {
-            let (face, wrap, inner) = if y < 0 {
-                (Face::South, ny - 1, 0)
-            } else {
-                (Face::North, 0, ny - 1)
-            };
-            return match self.faces[face as usize] {
-                FaceCondition::Periodic => self.own_anywhere(x, wrap, s),
-                FaceCondition::FreeSlip => self.own_anywhere(x, inner, MIRROR_Y[s]),
-                FaceCondition::Outflow => self.own_anywhere(x, inner, s),
-                _ => T::default(),
-            };
-        }
-        let (wrap, inner) = if x < 0 { (nx - 1, 0) } else { (0, nx - 1) };
-        match self.faces[x_face as usize] {
-            FaceCondition::Periodic => self.own_anywhere(wrap, y, s),
-            FaceCondition::FreeSlip => self.own_anywhere(inner, y, MIRROR_X[s]),
-            FaceCondition::Outflow => self.own_anywhere(inner, y, s),
-            _ => T::default(),
+        // The drain's resolution of the face rules (which never reaches an exchanged face
+        // from inside the slab).
+        match self.halo_index(x, y, s) {
+            super::inplace::NONE => T::default(),
+            at => self.buf[0][at],
         }
     }
 
