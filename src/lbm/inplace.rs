@@ -114,8 +114,16 @@ impl<T: Real> Lattice<T> {
         let run = MovingRun::new(moving, edge);
         let mut out = std::mem::take(&mut self.moving_out);
         if let Some(r) = &run {
-            out.clear();
-            out.resize(Q * r.cells().len(), T::default());
+            // Only partially saturated cells are computed aside (every one is written before
+            // it is read, so the buffer is not cleared); link cells need none.
+            out.resize(
+                if r.computes_aside() {
+                    Q * r.cells().len()
+                } else {
+                    0
+                },
+                T::default(),
+            );
         }
         let peers = self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some();
         // Open corners read their diagonal neighbour's values of the step's start, which the

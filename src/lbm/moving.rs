@@ -418,6 +418,12 @@ impl<'a> MovingRun<'a> {
         }
     }
 
+    /// Whether the plan's cells are computed whole beside an in-place sweep (partially
+    /// saturated cells) rather than inside it (link cells).
+    pub(crate) fn computes_aside(&self) -> bool {
+        matches!(self.kind, RunKind::Partial(..))
+    }
+
     /// Plan index of the first cell that went bad, if any.
     pub(crate) fn first_bad(&self) -> Option<usize> {
         let b = self.bad.load(Ordering::Relaxed);
