@@ -75,10 +75,15 @@ pub struct Coupler {
     pub(super) boundary: Vec<u32>,
     /// Per boundary cell: bit i − 1 set where its neighbour at x − c_i is covered.
     pub(super) boundary_mask: Vec<u8>,
-    /// Per-task lists of boundary candidates (cell, link mask), in grain order.
-    pub(super) chunks: Vec<Vec<(u32, u8)>>,
-    /// Interior covered cells.
+    /// Per boundary cell: its local row.
+    pub(super) boundary_row: Vec<u32>,
+    /// Each grain's boundary cells, kept between remaps (`boundary_lists.rs`).
+    pub(super) lists: super::boundary_lists::BoundaryLists,
+    /// Interior cells whose owner changed in the last remap.
+    pub(super) changed: Vec<u32>,
+    /// Interior covered cells, of the current map and of the one being built.
     pub(super) covered: Vec<u32>,
+    pub(super) next_covered: Vec<u32>,
     /// Solid fractions (partially saturated method), grain by grain, and the same in plan
     /// order (by row, then cell).
     pub(super) shares: Vec<Share>,
@@ -127,8 +132,11 @@ impl Coupler {
             next_touched: Vec::new(),
             boundary: Vec::new(),
             boundary_mask: Vec::new(),
-            chunks: Vec::new(),
+            boundary_row: Vec::new(),
+            lists: Default::default(),
+            changed: Vec::new(),
             covered: Vec::new(),
+            next_covered: Vec::new(),
             shares: Vec::new(),
             sorted: Vec::new(),
             mark: vec![false; cells],
@@ -171,9 +179,12 @@ impl Coupler {
         self.map(fluid.lattice(), views);
         self.owner.clone_from(&self.next_owner);
         self.touched.clone_from(&self.next_touched);
+        self.covered.clone_from(&self.next_covered);
         self.owner_ids.clear();
         self.owner_ids.extend_from_slice(ids);
         self.handover.reset(views, self.frame.global_nx);
+        self.lists.clear();
+        self.lists.follow(ids);
         self.rebuild_lists(fluid.lattice(), views);
         if fill_rest {
             self.fill_rest(fluid, views);
@@ -213,6 +224,7 @@ impl Coupler {
                 |k| lat.is_fluid_at(k),
                 &mut self.next_owner,
                 &mut self.next_touched,
+                &mut self.next_covered,
             ),
         }
     }

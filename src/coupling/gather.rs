@@ -65,25 +65,6 @@ pub fn gather2<A, B, C, F>(
     });
 }
 
-/// The items of sources `0..n` in one pass: the sources are cut into contiguous runs, one
-/// per task, and each run's items are pushed by `fill(s, out)` onto its own vector of
-/// `chunks` (kept between calls). `chunks.iter().flatten()` then gives every item in source
-/// order, whatever the thread count. For sources whose count costs as much as their items.
-pub fn gather_chunked<I, F>(n: usize, chunks: &mut Vec<Vec<I>>, fill: F)
-where
-    I: Send,
-    F: Fn(usize, &mut Vec<I>) + Sync,
-{
-    let parts = (4 * rayon::current_num_threads()).clamp(1, n.max(1));
-    chunks.resize_with(parts, Vec::new);
-    chunks.par_iter_mut().enumerate().for_each(|(c, out)| {
-        out.clear();
-        for s in c * n / parts..(c + 1) * n / parts {
-            fill(s, out);
-        }
-    });
-}
-
 /// A stable counting sort of `n` items by row (`row(i)` < `rows`): `order` receives the
 /// item indices grouped by row, in their original order within a row, and `offsets` the
 /// start of each row's group (rows + 1 values).
@@ -170,21 +151,6 @@ mod tests {
             .flat_map(|s| (0..s % 3).map(move |k| (s + 1000, k)))
             .collect();
         assert_eq!(out, expect);
-    }
-
-    #[test]
-    fn chunked_items_come_in_source_order() {
-        let mut chunks = Vec::new();
-        for n in [0usize, 1, 5, 300] {
-            gather_chunked(n, &mut chunks, |s, out| {
-                out.extend((0..s % 4).map(|k| (s, k)));
-            });
-            let got: Vec<(usize, usize)> = chunks.iter().flatten().copied().collect();
-            let expect: Vec<(usize, usize)> = (0..n)
-                .flat_map(|s| (0..s % 4).map(move |k| (s, k)))
-                .collect();
-            assert_eq!(got, expect, "n = {n}");
-        }
     }
 
     #[test]

@@ -35,10 +35,6 @@ impl Coupler {
             return;
         }
         let f = self.frame;
-        let interior = |k: u32| {
-            let (x, y) = f.local(k as usize);
-            x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
-        };
         let t = std::time::Instant::now();
         // Refills average whole neighbour cells, across faces too: the halos must hold
         // them now, as one rank would see them.
@@ -49,14 +45,11 @@ impl Coupler {
         let new_index = |id: u64| ids.binary_search(&id).ok();
         self.newly.clear();
         self.refills.clear();
+        self.changed.clear();
         let mut events: Vec<(u32, u32, bool)> = std::mem::take(&mut self.events);
         events.clear();
         let lat = fluid.lattice();
-        for &k in self
-            .covered
-            .iter()
-            .chain(self.next_touched.iter().filter(|&&k| interior(k)))
-        {
+        for &k in self.covered.iter().chain(self.next_covered.iter()) {
             let ku = k as usize;
             let (old, new) = (self.owner[ku], self.next_owner[ku]);
             let old_id = (old != NONE).then(|| self.owner_ids[old as usize]);
@@ -64,6 +57,7 @@ impl Coupler {
             if old_id == new_id {
                 continue;
             }
+            self.changed.push(k);
             if old == NONE {
                 // Covered: the grain takes the cell's momentum (Aidun, Lu & Ding 1998).
                 self.newly.push(k);
@@ -99,8 +93,13 @@ impl Coupler {
                 .add(g as usize, grain.centre[0], c[0], col, load);
         }
         self.events = events;
+        self.lists.follow(ids);
+        let (old, new) = (&self.owner, &self.next_owner);
+        self.lists
+            .mark_changed(&f, &self.changed, old, &self.owner_ids, new, ids);
         std::mem::swap(&mut self.owner, &mut self.next_owner);
         std::mem::swap(&mut self.touched, &mut self.next_touched);
+        std::mem::swap(&mut self.covered, &mut self.next_covered);
         self.owner_ids.clear();
         self.owner_ids.extend_from_slice(ids);
         self.passes[super::pass::HANDOVER] += t.elapsed().as_secs_f64();

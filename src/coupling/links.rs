@@ -2,7 +2,7 @@
 //! links to it, and the loads they hand to each grain.
 
 use super::exchange::{neighbour, Coupler, Unstable};
-use super::gather::{gather2, gather_chunked, group_by_row};
+use super::gather::{gather2, group_by_row};
 use super::map::{nearest_image, GrainView, NONE};
 use super::Scheme;
 use crate::lbm::d2q9::{CX, CY, Q, W};
@@ -10,43 +10,34 @@ use crate::lbm::moving::MovingLink;
 use crate::lbm::{Lattice, Real};
 
 impl Coupler {
-    /// The covered and boundary cell lists from `owner` (for the grains `views` it was
-    /// built from). Covered: `touched` restricted to interior cells. Boundary: grain by grain
+    /// The boundary cell list from `owner` (for the grains `views` it was built from; the
+    /// covered cells are listed by the map itself). Boundary: grain by grain
     /// (id order), each image's cells in row order, the interior fluid cells no grain covers
     /// that neighbour a cell of that grain; a cell next to several grains is listed with the
-    /// first. Both orders are the restriction of a partition-independent order.
+    /// first. Both orders are the restriction of a partition-independent order. Each grain's
+    /// cells are rescanned only where the last remap could have changed them (see
+    /// `boundary_lists.rs`).
     pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
-        self.covered.clear();
         self.boundary.clear();
         self.boundary_mask.clear();
+        self.boundary_row.clear();
         if self.scheme == Scheme::Psm {
             return;
         }
         let f = self.frame;
-        let interior = |k: usize| {
-            let (x, y) = f.local(k);
-            x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
-        };
-        self.covered.extend(
-            self.touched
-                .iter()
-                .copied()
-                .filter(|&k| interior(k as usize)),
-        );
         let owner = &self.owner;
         let fluid = |k: usize| lat.is_fluid_at(k);
-        gather_chunked(views.len(), &mut self.chunks, |g, out| {
-            boundary_of(&f, owner, &fluid, views, g, |k, mask| {
-                out.push((k as u32, mask))
+        let (mark, boundary) = (&mut self.mark, &mut self.boundary);
+        let (masks, rows) = (&mut self.boundary_mask, &mut self.boundary_row);
+        self.lists
+            .rebuild(&f, owner, &fluid, views, |(k, mask, y)| {
+                if !mark[k as usize] {
+                    mark[k as usize] = true;
+                    boundary.push(k);
+                    masks.push(mask);
+                    rows.push(y);
+                }
             });
-        });
-        for &(k, mask) in self.chunks.iter().flatten() {
-            if !self.mark[k as usize] {
-                self.mark[k as usize] = true;
-                self.boundary.push(k);
-                self.boundary_mask.push(mask);
-            }
-        }
         for &k in &self.boundary {
             self.mark[k as usize] = false;
         }
@@ -58,10 +49,11 @@ impl Coupler {
         let f = self.frame;
         let interpolated = self.scheme == Scheme::Interpolated;
         let (owner, boundary, masks) = (&self.owner, &self.boundary, &self.boundary_mask);
+        let rows = &self.boundary_row;
         group_by_row(
             boundary.len(),
             f.ny,
-            |c| f.local(boundary[c] as usize).1 as usize,
+            |c| rows[c] as usize,
             &mut self.links.rows,
             &mut self.order,
         );
@@ -74,9 +66,10 @@ impl Coupler {
             &mut self.link_grain,
             |c| masks[order[c] as usize].count_ones() as usize,
             |c, out, own| {
-                let k = boundary[order[c] as usize] as usize;
-                let mask = masks[order[c] as usize];
-                let centre = f.centre(k);
+                let b = order[c] as usize;
+                let k = boundary[b] as usize;
+                let mask = masks[b];
+                let centre = f.centre_in_row(k, rows[b] as usize);
                 let dirs = (1..Q).filter(|&i| mask & (1 << (i - 1)) != 0);
                 for (at, i) in dirs.enumerate() {
                     let g = owner[neighbour(&f, k, i, -1)];
@@ -127,18 +120,22 @@ impl Coupler {
         bad: Option<(usize, f64)>,
     ) -> Option<Unstable> {
         let f = self.frame;
-        for (c, &k) in self.links.cells.iter().enumerate() {
-            let col = self.column(k as usize);
-            let centre = f.centre(k as usize);
-            for l in self.links.start[c] as usize..self.links.start[c + 1] as usize {
-                let (i, m) = (self.links.links[l].dir as usize, self.link_momentum[l]);
-                let g = self.link_grain[l] as usize;
-                let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                let (mid, image) = link_midpoint(&f, centre, i, &views[g]);
-                let arm = [mid[0] - image[0], mid[1] - image[1]];
-                let (px, py) = (-m * cx, -m * cy);
-                let load = [px, py, arm[0] * py - arm[1] * px];
-                self.sums.add(g, views[g].centre[0], image[0], col, load);
+        let rows = &self.links.rows;
+        for y in 0..rows.len().saturating_sub(1) {
+            for c in rows[y] as usize..rows[y + 1] as usize {
+                let k = self.links.cells[c] as usize;
+                let col = (f.x_in_row(k, y) + f.x0 as i64) as usize;
+                let centre = f.centre_in_row(k, y);
+                for l in self.links.start[c] as usize..self.links.start[c + 1] as usize {
+                    let (i, m) = (self.links.links[l].dir as usize, self.link_momentum[l]);
+                    let g = self.link_grain[l] as usize;
+                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                    let (mid, image) = link_midpoint(&f, centre, i, &views[g]);
+                    let arm = [mid[0] - image[0], mid[1] - image[1]];
+                    let (px, py) = (-m * cx, -m * cy);
+                    let load = [px, py, arm[0] * py - arm[1] * px];
+                    self.sums.add(g, views[g].centre[0], image[0], col, load);
+                }
             }
         }
         bad.map(|(c, rho)| {
@@ -163,32 +160,4 @@ fn link_midpoint(
         centre[1] - 0.5 * CY[i] as f64,
     ];
     (mid, nearest_image(f, grain, mid))
-}
-
-/// Visit the boundary cells of grain `g` (see [`Coupler::rebuild_lists`]) in order, each
-/// with its link mask: bit i − 1 set where the neighbour at x − c_i is covered (by any
-/// grain).
-fn boundary_of(
-    f: &super::map::SlabFrame,
-    owner: &[u32],
-    fluid: &impl Fn(usize) -> bool,
-    views: &[GrainView],
-    g: usize,
-    mut visit: impl FnMut(usize, u8),
-) {
-    let grain = &views[g];
-    for c in f.images(grain) {
-        f.for_box(c, grain.radius + 1.0, |k, x, y| {
-            let interior = x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64;
-            if interior
-                && owner[k] == NONE
-                && fluid(k)
-                && (1..Q).any(|i| owner[neighbour(f, k, i, -1)] == g as u32)
-            {
-                let covered = |i: usize| owner[neighbour(f, k, i, -1)] != NONE;
-                let mask = (1..Q).fold(0u8, |m, i| m | ((covered(i) as u8) << (i - 1)));
-                visit(k, mask);
-            }
-        });
-    }
 }

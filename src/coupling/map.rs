@@ -74,6 +74,19 @@ impl SlabFrame {
         [(x + self.x0 as i64) as f64 + 0.5, y as f64 + 0.5]
     }
 
+    /// Local x of padded cell `k`, known to lie in local row `y` (no division).
+    #[inline]
+    pub fn x_in_row(&self, k: usize, y: usize) -> i64 {
+        k as i64 - ((y + 1) * self.stride) as i64 - 1
+    }
+
+    /// [`SlabFrame::centre`] of padded cell `k`, known to lie in local row `y`.
+    #[inline]
+    pub fn centre_in_row(&self, k: usize, y: usize) -> [f64; 2] {
+        let x = self.x_in_row(k, y);
+        [(x + self.x0 as i64) as f64 + 0.5, y as f64 + 0.5]
+    }
+
     /// The periodic images of a grain's centre that can reach this padded slab: the centre
     /// itself, shifted by ± the lattice size along periodic axes.
     pub fn images(&self, g: &GrainView) -> impl Iterator<Item = [f64; 2]> + '_ {
@@ -121,18 +134,22 @@ impl SlabFrame {
 ///
 /// `touched` holds, on entry, the cells this map set last time (they are cleared, so the
 /// cost follows the grains' area, not the lattice's); on exit, the cells set now, grain by
-/// grain and row by row (a fixed order).
+/// grain and row by row (a fixed order). `inner` receives the interior ones among them, in
+/// the same order.
 pub fn cover(
     frame: &SlabFrame,
     grains: &[GrainView],
     fluid: impl Fn(usize) -> bool,
     owner: &mut [u32],
     touched: &mut Vec<u32>,
+    inner: &mut Vec<u32>,
 ) {
     for &k in touched.iter() {
         owner[k as usize] = NONE;
     }
     touched.clear();
+    inner.clear();
+    let (nx, ny) = (frame.nx as i64, frame.ny as i64);
     for (g, grain) in grains.iter().enumerate() {
         for c in frame.images(grain) {
             frame.for_box(c, grain.radius, |k, x, y| {
@@ -144,6 +161,9 @@ pub fn cover(
                 if o == NONE {
                     owner[k] = g as u32;
                     touched.push(k as u32);
+                    if x >= 0 && y >= 0 && x < nx && y < ny {
+                        inner.push(k as u32);
+                    }
                 } else if o != g as u32 {
                     let p = frame.centre(k);
                     let d2 = |q: [f64; 2]| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);

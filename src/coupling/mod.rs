@@ -12,6 +12,7 @@
 //!    hands over the cells the grains covered or uncovered;
 //! 4. `boundaries`: the fluid's halo refill.
 
+mod boundary_lists;
 pub mod driver;
 pub mod exchange;
 mod gather;

@@ -114,7 +114,8 @@ impl Coupler {
         let (cells, totals) = (&plan.cells, &plan.total);
         let fill = |c: usize, out: &mut [SolidShare]| {
             let eps = eps_of(c);
-            let centre = f.centre(cells[c] as usize);
+            let first = &shares[start[c] as usize];
+            let centre = f.centre_in_row(first.cell as usize, first.row as usize);
             let group = &shares[start[c] as usize..start[c + 1] as usize];
             for (j, sh) in group.iter().enumerate() {
                 let grain = &views[sh.grain as usize];
@@ -154,8 +155,9 @@ impl Coupler {
     ) -> Option<Unstable> {
         let f = self.frame;
         for (c, &k) in self.psm.cells.iter().enumerate() {
-            let col = self.column(k as usize);
-            let centre = f.centre(k as usize);
+            let y = self.sorted[self.psm.start[c] as usize].row as usize;
+            let col = (f.x_in_row(k as usize, y) + f.x0 as i64) as usize;
+            let centre = f.centre_in_row(k as usize, y);
             for s in self.psm.start[c] as usize..self.psm.start[c + 1] as usize {
                 // Plan share s is sorted share s: its grain and the image it sees.
                 let (sh, p) = (&self.sorted[s], self.share_momentum[s]);
