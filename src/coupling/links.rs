@@ -85,12 +85,12 @@ impl Coupler {
                         let q =
                             super::geometry::link_fraction(centre, [-cx, -cy], image, grain.radius);
                         let ff = neighbour(&f, k, i, 1);
-                        // Interpolation below ½ needs a plain fluid cell upstream.
-                        if q < 0.5 && !(lat.is_fluid_at(ff) && owner[ff] == NONE) {
-                            0.5
-                        } else {
-                            q
-                        }
+                        // Interpolation below ½ needs a plain fluid cell upstream. Both
+                        // tests are evaluated and combined without a branch: which way
+                        // `q < 0.5` goes is unpredictable, and it waits on a square root.
+                        let upstream = lat.is_fluid_at(ff) & (owner[ff] == NONE);
+                        let half = (q < 0.5) & !upstream;
+                        [q, 0.5][half as usize]
                     } else {
                         0.5
                     };
