@@ -206,6 +206,10 @@ pub struct Summary {
     /// slowest rank's. Absent without grains.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub coupling_pass_seconds: BTreeMap<&'static str, f64>,
+    /// Coupled runs: `coupling::COUNTS` summed over ranks (remaps of the cover map done in
+    /// place and afresh, boundary lists kept and rescanned). Absent without grains.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub coupling_counts: BTreeMap<&'static str, u64>,
     /// Checkpoints written during the run.
     pub checkpoints: Vec<PathBuf>,
     /// HDF5 snapshot data written (bytes, all ranks) and the slowest rank's seconds in
@@ -577,6 +581,18 @@ fn run_typed<T: Real + hdf5::H5Type>(
         Some(g) => stage_stats(&crate::coupling::PASSES, &g.pass_seconds(), comm).1,
         None => BTreeMap::new(),
     };
+    let coupling_counts = match &sim.grains {
+        Some(g) => {
+            let mut v: Vec<f64> = g.counts().iter().map(|&c| c as f64).collect();
+            comm.sum_f64(&mut v);
+            crate::coupling::COUNTS
+                .iter()
+                .zip(v)
+                .map(|(n, c)| (*n, c as u64))
+                .collect()
+        }
+        None => BTreeMap::new(),
+    };
     let wall = comm.max_f64(wall);
     let mut halo_bytes = [sim.fluid.lattice().halo_bytes_per_step() as f64];
     comm.sum_f64(&mut halo_bytes);
@@ -614,6 +630,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         stage_seconds: stages.iter().map(|(k, v)| (*k, v.max_s)).collect(),
         stages,
         coupling_pass_seconds,
+        coupling_counts,
         checkpoints,
         snapshot_bytes: out.bytes,
         snapshot_write_s: comm.max_f64(out.write_s),

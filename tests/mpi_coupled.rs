@@ -23,7 +23,8 @@ fn with_scheme(scene: &str, scheme: &str, dir: &Path) -> String {
 }
 
 /// The coupling stage's per-pass seconds are all reported and, on one rank, add up to no
-/// more than the stage itself (they are timed inside it).
+/// more than the stage itself (they are timed inside it); the counts show the map updated
+/// in place.
 fn assert_passes_inside_the_stage(s: &serde_json::Value, scheme: &str) {
     let passes = &s["coupling_pass_seconds"];
     let mut sum = 0.0;
@@ -41,6 +42,21 @@ fn assert_passes_inside_the_stage(s: &serde_json::Value, scheme: &str) {
         sum <= stage * (1.0 + 1e-9) + 1e-6,
         "{scheme}: passes {sum} s > stage {stage} s"
     );
+    // On one rank the same grains stay in view: after the first step, the bounce-back
+    // schemes update the cover map in place and keep some boundary lists.
+    let counts = &s["coupling_counts"];
+    let count = |name: &str| {
+        counts[name]
+            .as_u64()
+            .unwrap_or_else(|| panic!("{scheme}: {counts}"))
+    };
+    if scheme != "psm" {
+        assert!(
+            count("remaps_in_place") > 10 * count("remaps_afresh"),
+            "{scheme}: {counts}"
+        );
+        assert!(count("lists_kept") > 0, "{scheme}: {counts}");
+    }
 }
 
 /// The scene on 1 rank and on each of `ranks` with the default (in-place) kernel, and with

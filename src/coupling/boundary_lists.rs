@@ -10,6 +10,7 @@
 //! new to this slab. The kept lists are the very lists a rescan would give, so the
 //! boundary list, and every bit after it, is unchanged (tested against a full rescan).
 
+use super::cover_update::Change;
 use super::map::{GrainView, SlabFrame, NONE};
 use crate::lbm::d2q9::Q;
 use rayon::prelude::*;
@@ -69,35 +70,33 @@ impl BoundaryLists {
         self.dirty.resize(ids.len(), true);
     }
 
-    /// Cells `changed` changed owner between the map `old` (view indices of `old_ids`) and
-    /// `new` (view indices of `new_ids`; both id lists increasing): mark every grain that
-    /// owns, in either map, a cell within two cells of a changed one. Call after
-    /// [`BoundaryLists::follow`] for `new_ids`.
-    pub fn mark_changed(
-        &mut self,
-        f: &SlabFrame,
-        changed: &[u32],
-        old: &[u32],
-        old_ids: &[u64],
-        new: &[u32],
-        new_ids: &[u64],
-    ) {
-        for &e in changed {
-            let (ex, ey) = f.local(e as usize);
+    /// After a remap that kept the same grains in view (call after
+    /// [`BoundaryLists::follow`]): `changes` lists the cells whose owner changed, with both
+    /// owners, and `owner` holds at every other cell its owner (the same before and after).
+    /// Mark every grain that owns, before or after, a cell within two cells of a changed
+    /// one.
+    pub fn mark_near(&mut self, f: &SlabFrame, changes: &[Change], owner: &[u32]) {
+        for c in changes {
+            for g in [c.old, c.new] {
+                if g != NONE {
+                    self.dirty[g as usize] = true;
+                }
+            }
+            let (ex, ey) = f.local(c.cell as usize);
             for y in (ey - 2).max(-1)..=(ey + 2).min(f.ny as i64) {
                 for x in (ex - 2).max(-1)..=(ex + 2).min(f.nx as i64) {
                     let k = f.padded(x, y);
-                    if new[k] != NONE {
-                        self.dirty[new[k] as usize] = true;
-                    }
-                    if old[k] != NONE {
-                        if let Ok(g) = new_ids.binary_search(&old_ids[old[k] as usize]) {
-                            self.dirty[g] = true;
-                        }
+                    if owner[k] != NONE {
+                        self.dirty[owner[k] as usize] = true;
                     }
                 }
             }
         }
+    }
+
+    /// Mark every grain (a remap that mapped afresh: rescan all).
+    pub fn mark_all(&mut self) {
+        self.dirty.iter_mut().for_each(|d| *d = true);
     }
 
     /// Rescan the dirty grains and those near the slab's edge (in parallel), then visit
@@ -180,6 +179,7 @@ pub(super) fn boundary_of(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::coupling::cover_update::CoverUpdate;
     use crate::coupling::map::cover;
 
     /// A small deterministic generator (no test-only crate needed).
@@ -229,10 +229,14 @@ mod tests {
                     [s * (next(&mut seed) - 0.5), s * (next(&mut seed) - 0.5)]
                 })
                 .collect();
-            let (mut owner, mut next_owner) = (vec![NONE; cells], vec![NONE; cells]);
-            let (mut t0, mut t1, mut in0, mut in1) = (vec![], vec![], vec![], vec![]);
+            let (mut owner, mut fresh) = (vec![NONE; cells], vec![NONE; cells]);
+            let (mut touched, mut inner) = (vec![], vec![]);
             let mut ids: Vec<u64> = Vec::new();
+            let mut mapped: Vec<GrainView> = Vec::new();
             let mut lists = BoundaryLists::default();
+            let mut update = CoverUpdate::default();
+            let (mut mark, mut changes) = (vec![false; cells], Vec::new());
+            let mut in_place = 0;
             for round in 0..60 {
                 // Grain 3 leaves the view for rounds 20..30, grain 11 for 40..45.
                 let hidden = |id: usize| {
@@ -241,28 +245,36 @@ mod tests {
                 };
                 let new_ids: Vec<u64> = (0..40u64).filter(|&i| !hidden(i as usize)).collect();
                 let views: Vec<GrainView> = new_ids.iter().map(|&i| all[i as usize]).collect();
-                cover(&f, &views, fluid, &mut next_owner, &mut t1, &mut in1);
-                if round == 0 {
-                    lists.clear();
+                cover(&f, &views, fluid, &mut fresh, &mut touched, &mut inner);
+                // As `Coupler::remap` does: in place when the same grains stay in view,
+                // otherwise afresh with every grain rescanned.
+                if round > 0
+                    && ids == new_ids
+                    && update.changes(&f, &mapped, &views, &fluid, &owner, &mut mark, &mut changes)
+                {
+                    in_place += 1;
+                    for c in &changes {
+                        if c.old == NONE {
+                            owner[c.cell as usize] = c.new;
+                        }
+                    }
                     lists.follow(&new_ids);
+                    lists.mark_near(&f, &changes, &owner);
+                    for c in &changes {
+                        owner[c.cell as usize] = c.new;
+                    }
+                    assert!(owner == fresh, "case {case}, round {round}");
                 } else {
-                    let id = |m: &[u32], ids: &[u64], k: usize| {
-                        (m[k] != NONE).then(|| ids[m[k] as usize])
-                    };
-                    let changed: Vec<u32> = in0
-                        .iter()
-                        .chain(in1.iter())
-                        .copied()
-                        .filter(|&k| {
-                            id(&owner, &ids, k as usize) != id(&next_owner, &new_ids, k as usize)
-                        })
-                        .collect();
+                    if round == 0 {
+                        lists.clear();
+                    }
                     lists.follow(&new_ids);
-                    lists.mark_changed(&f, &changed, &owner, &ids, &next_owner, &new_ids);
+                    if round > 0 {
+                        lists.mark_all();
+                    }
+                    owner.clone_from(&fresh);
                 }
-                std::mem::swap(&mut owner, &mut next_owner);
-                std::mem::swap(&mut t0, &mut t1);
-                std::mem::swap(&mut in0, &mut in1);
+                mapped.clone_from(&views);
                 ids = new_ids;
                 let mut kept = Vec::new();
                 lists.rebuild(&f, &owner, &fluid, &views, |e| kept.push(e));
@@ -276,6 +288,7 @@ mod tests {
                     g.centre = [g.centre[0] + d[0], g.centre[1] + d[1]];
                 }
             }
+            assert!(in_place > 30, "case {case}: {in_place} remaps in place");
             assert!(
                 lists.kept > lists.rescanned / 4,
                 "case {case}: kept {} rescanned {}",

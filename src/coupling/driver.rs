@@ -264,6 +264,11 @@ impl LbmDem {
         self.coupler.pass_seconds()
     }
 
+    /// This rank's counts of [`super::COUNTS`] (see [`Coupler::counts`]).
+    pub fn counts(&self) -> [u64; 4] {
+        self.coupler.counts()
+    }
+
     /// The coupler (maps, loads).
     pub fn coupler(&self) -> &Coupler {
         &self.coupler

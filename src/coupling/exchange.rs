@@ -17,7 +17,8 @@
 //! (ρ₀ c_s² on the surface) integrates to zero over a closed surface, and leaving it out is
 //! what makes fluid + grain momentum conserved to round-off (tested).
 
-use super::map::{cover, GrainView, Share, SlabFrame, NONE};
+use super::cover_update::{Change, CoverUpdate};
+use super::map::{cover, set_cells, GrainView, Share, SlabFrame, NONE};
 use super::sums::ColumnSums;
 use super::{Refill, Scheme};
 use crate::lbm::moving::{LinkPlan, MovingCells, PsmPlan};
@@ -64,13 +65,22 @@ pub struct Coupler {
     pub(super) frame: SlabFrame,
     /// Covering grain per padded cell (bounce-back schemes): an index into `owner_ids`.
     pub(super) owner: Vec<u32>,
-    /// The map being built for the next step (kept for its allocation).
+    /// A map built afresh when the grains in view change (all [`NONE`] between remaps).
     pub(super) next_owner: Vec<u32>,
     /// Ids and views of the grains `owner` refers to (the views of the last map).
     pub(super) owner_ids: Vec<u64>,
-    /// Cells (padded, halo included) set in `owner` and in `next_owner`.
-    pub(super) touched: Vec<u32>,
-    pub(super) next_touched: Vec<u32>,
+    pub(super) mapped: Vec<GrainView>,
+    /// Updates `owner` in place when the same grains stay in view (`cover_update.rs`).
+    pub(super) update: CoverUpdate,
+    /// Remaps done in place and remaps that mapped afresh (bounce-back schemes).
+    pub(super) in_place_remaps: u64,
+    pub(super) fresh_remaps: u64,
+    /// Cells whose owner changes in the current remap.
+    pub(super) changes: Vec<Change>,
+    /// Scratch cell lists of a remap done afresh: cells set in the old map and the new.
+    pub(super) old_cells: Vec<u32>,
+    pub(super) new_cells: Vec<u32>,
+    pub(super) scratch: Vec<u32>,
     /// Interior exterior-fluid cells with at least one covered neighbour.
     pub(super) boundary: Vec<u32>,
     /// Per boundary cell: bit i − 1 set where its neighbour at x − c_i is covered.
@@ -79,11 +89,6 @@ pub struct Coupler {
     pub(super) boundary_row: Vec<u32>,
     /// Each grain's boundary cells, kept between remaps (`boundary_lists.rs`).
     pub(super) lists: super::boundary_lists::BoundaryLists,
-    /// Interior cells whose owner changed in the last remap.
-    pub(super) changed: Vec<u32>,
-    /// Interior covered cells, of the current map and of the one being built.
-    pub(super) covered: Vec<u32>,
-    pub(super) next_covered: Vec<u32>,
     /// Solid fractions (partially saturated method), grain by grain, and the same in plan
     /// order (by row, then cell).
     pub(super) shares: Vec<Share>,
@@ -128,15 +133,18 @@ impl Coupler {
             owner: vec![NONE; cells],
             next_owner: vec![NONE; cells],
             owner_ids: Vec::new(),
-            touched: Vec::new(),
-            next_touched: Vec::new(),
+            mapped: Vec::new(),
+            update: CoverUpdate::default(),
+            in_place_remaps: 0,
+            fresh_remaps: 0,
+            changes: Vec::new(),
+            old_cells: Vec::new(),
+            new_cells: Vec::new(),
+            scratch: Vec::new(),
             boundary: Vec::new(),
             boundary_mask: Vec::new(),
             boundary_row: Vec::new(),
             lists: Default::default(),
-            changed: Vec::new(),
-            covered: Vec::new(),
-            next_covered: Vec::new(),
             shares: Vec::new(),
             sorted: Vec::new(),
             mark: vec![false; cells],
@@ -176,10 +184,35 @@ impl Coupler {
         ids: &[u64],
         fill_rest: bool,
     ) {
-        self.map(fluid.lattice(), views);
-        self.owner.clone_from(&self.next_owner);
-        self.touched.clone_from(&self.next_touched);
-        self.covered.clone_from(&self.next_covered);
+        let f = self.frame;
+        match self.scheme {
+            Scheme::Psm => self.map_shares(fluid.lattice(), views),
+            _ => {
+                // Clear what an earlier start left, then map.
+                set_cells(
+                    &f,
+                    &self.mapped,
+                    &self.owner,
+                    &mut self.mark,
+                    &mut self.scratch,
+                );
+                for &k in &self.scratch {
+                    self.owner[k as usize] = NONE;
+                }
+                let lat = fluid.lattice();
+                self.scratch.clear();
+                cover(
+                    &f,
+                    views,
+                    |k| lat.is_fluid_at(k),
+                    &mut self.owner,
+                    &mut self.scratch,
+                    &mut self.new_cells,
+                );
+            }
+        }
+        self.mapped.clear();
+        self.mapped.extend_from_slice(views);
         self.owner_ids.clear();
         self.owner_ids.extend_from_slice(ids);
         self.handover.reset(views, self.frame.global_nx);
@@ -191,9 +224,27 @@ impl Coupler {
         }
     }
 
-    /// Cells covered by a grain now (bounce-back schemes): padded indices.
-    pub fn covered_cells(&self) -> &[u32] {
-        &self.covered
+    /// The interior cells covered by a grain now (bounce-back schemes), padded indices,
+    /// into `out`, grain by grain.
+    fn covered_cells(&mut self, out: &mut Vec<u32>) {
+        let f = self.frame;
+        set_cells(&f, &self.mapped, &self.owner, &mut self.mark, out);
+        out.retain(|&k| {
+            let (x, y) = f.local(k as usize);
+            x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64
+        });
+    }
+
+    /// This rank's counts of [`super::COUNTS`]: remaps done in place and afresh, grains
+    /// whose boundary lists were kept and rescanned (bounce-back schemes; all zero with
+    /// PSM).
+    pub fn counts(&self) -> [u64; 4] {
+        [
+            self.in_place_remaps,
+            self.fresh_remaps,
+            self.lists.kept,
+            self.lists.rescanned,
+        ]
     }
 
     /// Solid fraction of every interior cell (padded index → Σ ε, capped at 1).
@@ -207,25 +258,18 @@ impl Coupler {
                 }
             }
             _ => {
-                for &k in &self.covered {
-                    out[k as usize] = 1.0;
+                let f = self.frame;
+                for (g, grain) in self.mapped.iter().enumerate() {
+                    for c in f.images(grain) {
+                        f.for_box(c, grain.radius, |k, x, y| {
+                            let inside = x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64;
+                            if inside && self.owner[k] == g as u32 {
+                                out[k] = 1.0;
+                            }
+                        });
+                    }
                 }
             }
-        }
-    }
-
-    /// Build the next map (owners or shares) for the grains at their current positions.
-    pub(super) fn map<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
-        match self.scheme {
-            Scheme::Psm => self.map_shares(lat, views),
-            _ => cover(
-                &self.frame,
-                views,
-                |k| lat.is_fluid_at(k),
-                &mut self.next_owner,
-                &mut self.next_touched,
-                &mut self.next_covered,
-            ),
         }
     }
 
@@ -287,13 +331,16 @@ impl Coupler {
         if self.scheme == Scheme::Psm {
             return;
         }
+        let mut covered = std::mem::take(&mut self.scratch);
+        self.covered_cells(&mut covered);
         let (f, owner) = (self.frame, &self.owner);
-        self.covered
+        covered
             .par_iter()
             .with_min_len(1024)
             .map(|&k| rigid_velocity(&f, &views[owner[k as usize] as usize], f.centre(k as usize)))
             .collect_into_vec(&mut self.rest);
-        fluid.set_rest(&self.covered, &self.rest);
+        fluid.set_rest(&covered, &self.rest);
+        self.scratch = covered;
     }
 
     /// Global column of padded cell `k`.

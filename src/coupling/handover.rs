@@ -3,12 +3,13 @@
 //! uncovers is refilled and its momentum is taken from the grain. Also the fluid half of the
 //! momentum balance.
 
+use super::cover_update::Change;
 use super::exchange::{neighbour, rigid_velocity, Coupler};
-use super::map::{nearest_image, GrainView, NONE};
+use super::map::{cover, nearest_image, set_cells, GrainView, NONE};
 use super::{Refill, Scheme};
 use crate::lbm::d2q9::{CX, CY, Q};
 use crate::lbm::moving::Refill as CellRefill;
-use crate::lbm::{FluidBackend, Real};
+use crate::lbm::{FluidBackend, Lattice, Real};
 use decomposition::Comm;
 
 impl Coupler {
@@ -27,49 +28,79 @@ impl Coupler {
     ) {
         let t = std::time::Instant::now();
         self.handover.reset(views, self.frame.global_nx);
-        self.map(fluid.lattice(), views);
-        self.passes[super::pass::MAP] += t.elapsed().as_secs_f64();
         if self.scheme == Scheme::Psm {
+            self.map_shares(fluid.lattice(), views);
             self.owner_ids.clear();
             self.owner_ids.extend_from_slice(ids);
+            self.passes[super::pass::MAP] += t.elapsed().as_secs_f64();
             return;
         }
         let f = self.frame;
+        // The same grains in view: update the map in place (`cover_update.rs`); otherwise
+        // map afresh into `next_owner` and compare.
+        let in_place = {
+            let lat = fluid.lattice();
+            self.owner_ids == ids
+                && self.update.changes(
+                    &f,
+                    &self.mapped,
+                    views,
+                    &|k| lat.is_fluid_at(k),
+                    &self.owner,
+                    &mut self.mark,
+                    &mut self.changes,
+                )
+        };
+        if in_place {
+            self.in_place_remaps += 1;
+        } else {
+            self.fresh_remaps += 1;
+            self.changes_afresh(fluid.lattice(), views, ids);
+        }
+        self.passes[super::pass::MAP] += t.elapsed().as_secs_f64();
         let t = std::time::Instant::now();
         // Refills average whole neighbour cells, across faces too: the halos must hold
         // them now, as one rank would see them.
         fluid.refresh_halos_full(comm);
-        // Only cells covered before (uncovered now) or after (covered now) can change hands;
-        // a cell in both lists changes in at most one of them. Both lists are in a
-        // partition-independent order, so is every sum below.
+        // The interior cells changing hands, uncovered ones first, each kind grain by grain
+        // (id order) and row by row: every per-grain, per-column sum below is then added in
+        // increasing row, whatever the partition.
         let new_index = |id: u64| ids.binary_search(&id).ok();
-        self.newly.clear();
-        self.refills.clear();
-        self.changed.clear();
         let mut events: Vec<(u32, u32, bool)> = std::mem::take(&mut self.events);
         events.clear();
-        let lat = fluid.lattice();
-        for &k in self.covered.iter().chain(self.next_covered.iter()) {
-            let ku = k as usize;
-            let (old, new) = (self.owner[ku], self.next_owner[ku]);
-            let old_id = (old != NONE).then(|| self.owner_ids[old as usize]);
-            let new_id = (new != NONE).then(|| ids[new as usize]);
-            if old_id == new_id {
+        let (nx, ny) = (f.nx as i64, f.ny as i64);
+        for c in &self.changes {
+            let (x, y) = f.local(c.cell as usize);
+            if x < 0 || y < 0 || x >= nx || y >= ny {
                 continue;
             }
-            self.changed.push(k);
-            if old == NONE {
+            if c.old == NONE {
                 // Covered: the grain takes the cell's momentum (Aidun, Lu & Ding 1998).
-                self.newly.push(k);
-                events.push((k, new, true));
-            } else if new == NONE {
+                events.push((c.cell, c.new, true));
+            } else if c.new == NONE {
                 // Uncovered, by a grain that is still in view (it moved less than a cell).
-                let Some(g) = new_index(self.owner_ids[old as usize]) else {
-                    continue;
-                };
-                let r = self.refill_for(ku, &views[g], |m| lat.is_fluid_at(m));
+                if let Some(g) = new_index(self.owner_ids[c.old as usize]) {
+                    events.push((c.cell, g as u32, false));
+                }
+            }
+        }
+        events.sort_unstable_by_key(|&(k, g, covered)| (covered, g, k));
+        // From here on a cell counts as covered when it is covered before or after the
+        // move: the newly covered ones are written now, the uncovered ones cleared last.
+        for c in &self.changes {
+            if c.old == NONE {
+                self.owner[c.cell as usize] = c.new;
+            }
+        }
+        self.newly.clear();
+        self.refills.clear();
+        let lat = fluid.lattice();
+        for &(k, g, covered) in &events {
+            if covered {
+                self.newly.push(k);
+            } else {
+                let r = self.refill_for(k as usize, &views[g as usize], |m| lat.is_fluid_at(m));
                 self.refills.push(r);
-                events.push((k, g as u32, false));
             }
         }
         fluid.momentum_of_cells(&self.newly, &mut self.cell_momentum);
@@ -94,18 +125,72 @@ impl Coupler {
         }
         self.events = events;
         self.lists.follow(ids);
-        let (old, new) = (&self.owner, &self.next_owner);
-        self.lists
-            .mark_changed(&f, &self.changed, old, &self.owner_ids, new, ids);
-        std::mem::swap(&mut self.owner, &mut self.next_owner);
-        std::mem::swap(&mut self.touched, &mut self.next_touched);
-        std::mem::swap(&mut self.covered, &mut self.next_covered);
+        if in_place {
+            self.lists.mark_near(&f, &self.changes, &self.owner);
+            for c in &self.changes {
+                self.owner[c.cell as usize] = c.new;
+            }
+        } else {
+            self.lists.mark_all();
+            std::mem::swap(&mut self.owner, &mut self.next_owner);
+            // `next_owner` now holds the old map and the newly covered cells: clear them
+            // (it is all NONE between remaps).
+            for &k in self.old_cells.iter() {
+                self.next_owner[k as usize] = NONE;
+            }
+            for c in &self.changes {
+                self.next_owner[c.cell as usize] = NONE;
+            }
+        }
+        self.mapped.clear();
+        self.mapped.extend_from_slice(views);
         self.owner_ids.clear();
         self.owner_ids.extend_from_slice(ids);
         self.passes[super::pass::HANDOVER] += t.elapsed().as_secs_f64();
         let t = std::time::Instant::now();
         self.rebuild_lists(fluid.lattice(), views);
         self.passes[super::pass::LISTS] += t.elapsed().as_secs_f64();
+    }
+
+    /// Map the grains `views` (ids `ids`) afresh into `next_owner` and list in `changes`
+    /// every cell whose owner's id differs from `owner`'s (old owners as indices into
+    /// `owner_ids`, new ones into `ids`). `old_cells` receives the cells set in `owner`.
+    fn changes_afresh<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView], ids: &[u64]) {
+        let f = self.frame;
+        let fluid = |k: usize| lat.is_fluid_at(k);
+        set_cells(
+            &f,
+            &self.mapped,
+            &self.owner,
+            &mut self.mark,
+            &mut self.old_cells,
+        );
+        self.new_cells.clear();
+        cover(
+            &f,
+            views,
+            fluid,
+            &mut self.next_owner,
+            &mut self.new_cells,
+            &mut self.scratch,
+        );
+        self.changes.clear();
+        for &k in self.old_cells.iter().chain(self.new_cells.iter()) {
+            let ku = k as usize;
+            if self.mark[ku] {
+                continue;
+            }
+            self.mark[ku] = true;
+            let (old, new) = (self.owner[ku], self.next_owner[ku]);
+            let old_id = (old != NONE).then(|| self.owner_ids[old as usize]);
+            let new_id = (new != NONE).then(|| ids[new as usize]);
+            if old_id != new_id {
+                self.changes.push(Change { cell: k, old, new });
+            }
+        }
+        for &k in self.old_cells.iter().chain(self.new_cells.iter()) {
+            self.mark[k as usize] = false;
+        }
     }
 
     /// How to refill padded cell `k` that grain `g` has just uncovered: its neighbours
@@ -120,7 +205,7 @@ impl Coupler {
         let mut along: Option<(f64, usize)> = None;
         for i in 1..Q {
             let m = neighbour(&f, k, i, 1);
-            if !fluid(m) || self.next_owner[m] != NONE || self.owner[m] != NONE {
+            if !fluid(m) || self.owner[m] != NONE {
                 continue;
             }
             mask |= 1 << i;

@@ -177,6 +177,32 @@ pub fn cover(
     }
 }
 
+/// The cells set in `owner` (a map of the grains `views`, as [`cover`] builds it), grain by
+/// grain, each grain's images row by row: every cell a grain owns lies in its box.
+/// `mark` is a per-cell scratch, all false on entry and exit.
+pub fn set_cells(
+    frame: &SlabFrame,
+    views: &[GrainView],
+    owner: &[u32],
+    mark: &mut [bool],
+    out: &mut Vec<u32>,
+) {
+    out.clear();
+    for (g, grain) in views.iter().enumerate() {
+        for c in frame.images(grain) {
+            frame.for_box(c, grain.radius, |k, _, _| {
+                if owner[k] == g as u32 && !mark[k] {
+                    mark[k] = true;
+                    out.push(k as u32);
+                }
+            });
+        }
+    }
+    for &k in out.iter() {
+        mark[k as usize] = false;
+    }
+}
+
 /// The image of grain `g` nearest to point `p`.
 #[inline]
 pub fn nearest_image(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] {

@@ -13,11 +13,13 @@
 //! 4. `boundaries`: the fluid's halo refill.
 
 mod boundary_lists;
+mod cover_update;
 pub mod driver;
 pub mod exchange;
 mod gather;
 pub mod geometry;
 pub mod ghosts;
+mod grain_neighbours;
 mod handover;
 mod links;
 pub mod map;
@@ -32,6 +34,16 @@ pub use driver::{LbmDem, RestoredCoupling};
 /// grains' owners, mapping the grains onto the cells, handing over covered and uncovered
 /// cells (bounce-back schemes), and rebuilding the boundary lists.
 pub const PASSES: [&str; 6] = ["plan", "collect", "reduce", "map", "handover", "lists"];
+
+/// What the coupling counts over a run (summed over ranks in `summary.json`): remaps of
+/// the cover map done in place and afresh (`cover_update.rs`), and grains whose boundary
+/// lists were kept and rescanned (`boundary_lists.rs`). Bounce-back schemes only.
+pub const COUNTS: [&str; 4] = [
+    "remaps_in_place",
+    "remaps_afresh",
+    "lists_kept",
+    "lists_rescanned",
+];
 
 /// Index of each pass in [`PASSES`].
 pub(crate) mod pass {
