@@ -147,9 +147,10 @@ fn near_edge(f: &SlabFrame, g: &GrainView) -> bool {
 }
 
 /// Visit the boundary cells of grain `g` in order (image by image, each image's box of
-/// radius r + 1 row by row), each as an [`Entry`]. A cell is a boundary cell of `g` when it
-/// is interior, `fluid`, uncovered (`owner` is [`NONE`]) and one of its eight neighbours is
-/// owned by `g`.
+/// radius r + 1 row by row), each as an [`Entry`]. A cell is a boundary cell when it is
+/// interior, `fluid`, uncovered (`owner` is [`NONE`]) and one of its eight neighbours is
+/// covered; it is listed with the lowest-index grain among its neighbours' owners (which
+/// the cell's neighbours alone decide, so a kept list stays right), and once.
 pub(super) fn boundary_of(
     f: &SlabFrame,
     owner: &[u32],
@@ -160,19 +161,37 @@ pub(super) fn boundary_of(
 ) {
     use super::exchange::neighbour;
     let grain = &views[g];
+    let reach = grain.radius + 1.0;
+    // Boxes of earlier images (global x, y ranges), where the lattice is so small that
+    // two images' boxes can share a cell.
+    let (mut earlier, mut images) = ([[0i64; 4]; 9], 0);
     for c in f.images(grain) {
-        f.for_box(c, grain.radius + 1.0, |k, x, y| {
+        f.for_box(c, reach, |k, x, y| {
             let interior = x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64;
-            if interior
-                && owner[k] == NONE
-                && fluid(k)
-                && (1..Q).any(|i| owner[neighbour(f, k, i, -1)] == g as u32)
-            {
-                let covered = |i: usize| owner[neighbour(f, k, i, -1)] != NONE;
-                let mask = (1..Q).fold(0u8, |m, i| m | ((covered(i) as u8) << (i - 1)));
+            if !interior || owner[k] != NONE || !fluid(k) {
+                return;
+            }
+            let (mut mask, mut first) = (0u8, NONE);
+            for i in 1..Q {
+                let o = owner[neighbour(f, k, i, -1)];
+                mask |= ((o != NONE) as u8) << (i - 1);
+                first = first.min(o);
+            }
+            let gx = x + f.x0 as i64;
+            let seen = earlier[..images]
+                .iter()
+                .any(|b| (b[0]..=b[1]).contains(&gx) && (b[2]..=b[3]).contains(&y));
+            if first == g as u32 && !seen {
                 visit((k as u32, mask, y as u32));
             }
         });
+        earlier[images] = [
+            (c[0] - reach).floor() as i64,
+            (c[0] + reach).floor() as i64,
+            (c[1] - reach).floor() as i64,
+            (c[1] + reach).floor() as i64,
+        ];
+        images += 1;
     }
 }
 
@@ -283,6 +302,11 @@ mod tests {
                     boundary_of(&f, &owner, &fluid, &views, g, |e| full.push(e));
                 }
                 assert_eq!(kept, full, "case {case}, round {round}");
+                // Every boundary cell is listed once, with one grain.
+                let mut cells: Vec<u32> = full.iter().map(|e| e.0).collect();
+                cells.sort_unstable();
+                cells.dedup();
+                assert_eq!(cells.len(), full.len(), "case {case}, round {round}");
                 assert!(full.len() > 200, "case {case}: {} entries", full.len());
                 for (g, d) in all.iter_mut().zip(&step) {
                     g.centre = [g.centre[0] + d[0], g.centre[1] + d[1]];

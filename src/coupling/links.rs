@@ -10,13 +10,12 @@ use crate::lbm::moving::MovingLink;
 use crate::lbm::{Lattice, Real};
 
 impl Coupler {
-    /// The boundary cell list from `owner` (for the grains `views` it was built from; the
-    /// covered cells are listed by the map itself). Boundary: grain by grain
-    /// (id order), each image's cells in row order, the interior fluid cells no grain covers
-    /// that neighbour a cell of that grain; a cell next to several grains is listed with the
-    /// first. Both orders are the restriction of a partition-independent order. Each grain's
-    /// cells are rescanned only where the last remap could have changed them (see
-    /// `boundary_lists.rs`).
+    /// The boundary cell list from `owner` (for the grains `views` it was built from):
+    /// grain by grain (id order), each image's cells in row order, the interior fluid cells
+    /// no grain covers that neighbour a cell of that grain; a cell next to several grains is
+    /// listed with the first (`boundary_lists::boundary_of`). The order is the restriction
+    /// of a partition-independent order. Each grain's cells are rescanned only where the
+    /// last remap could have changed them (see `boundary_lists.rs`).
     pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         self.boundary.clear();
         self.boundary_mask.clear();
@@ -27,20 +26,14 @@ impl Coupler {
         let f = self.frame;
         let owner = &self.owner;
         let fluid = |k: usize| lat.is_fluid_at(k);
-        let (mark, boundary) = (&mut self.mark, &mut self.boundary);
+        let boundary = &mut self.boundary;
         let (masks, rows) = (&mut self.boundary_mask, &mut self.boundary_row);
         self.lists
             .rebuild(&f, owner, &fluid, views, |(k, mask, y)| {
-                if !mark[k as usize] {
-                    mark[k as usize] = true;
-                    boundary.push(k);
-                    masks.push(mask);
-                    rows.push(y);
-                }
+                boundary.push(k);
+                masks.push(mask);
+                rows.push(y);
             });
-        for &k in &self.boundary {
-            self.mark[k as usize] = false;
-        }
     }
 
     /// Plan the boundary cells' links (half-way or interpolated bounce-back with the grain's
