@@ -207,7 +207,8 @@ pub struct Summary {
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub coupling_pass_seconds: BTreeMap<&'static str, f64>,
     /// Coupled runs: `coupling::COUNTS` summed over ranks (remaps of the cover map done in
-    /// place and afresh, boundary lists kept and rescanned). Absent without grains.
+    /// place and afresh, grains decided and skipped in them, boundary lists kept and
+    /// rescanned). Absent without grains.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub coupling_counts: BTreeMap<&'static str, u64>,
     /// Checkpoints written during the run.

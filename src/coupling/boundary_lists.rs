@@ -251,7 +251,6 @@ mod tests {
             let (mut owner, mut fresh) = (vec![NONE; cells], vec![NONE; cells]);
             let (mut touched, mut inner) = (vec![], vec![]);
             let mut ids: Vec<u64> = Vec::new();
-            let mut mapped: Vec<GrainView> = Vec::new();
             let mut lists = BoundaryLists::default();
             let mut update = CoverUpdate::default();
             let (mut mark, mut changes) = (vec![false; cells], Vec::new());
@@ -269,7 +268,7 @@ mod tests {
                 // otherwise afresh with every grain rescanned.
                 if round > 0
                     && ids == new_ids
-                    && update.changes(&f, &mapped, &views, &fluid, &owner, &mut mark, &mut changes)
+                    && update.changes(&f, &views, &fluid, &owner, &mut mark, &mut changes)
                 {
                     in_place += 1;
                     for c in &changes {
@@ -292,8 +291,8 @@ mod tests {
                         lists.mark_all();
                     }
                     owner.clone_from(&fresh);
+                    update.reset(&views);
                 }
-                mapped.clone_from(&views);
                 ids = new_ids;
                 let mut kept = Vec::new();
                 lists.rebuild(&f, &owner, &fluid, &views, |e| kept.push(e));

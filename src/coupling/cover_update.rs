@@ -13,6 +13,9 @@
 //!   index on a tie) over the grain and its neighbours, which include every grain that can
 //!   cover such a cell.
 //!
+//! An isolated grain that moved less than its *slack* (how far it may move before a cell
+//! centre crosses its circle) since its cells were last decided is skipped.
+//!
 //! The result is the list of cells whose owner changes; applied to the old map it gives
 //! the very map `cover` would build for the new positions (tested over many random moves).
 
@@ -36,9 +39,19 @@ pub struct Change {
     pub new: u32,
 }
 
-/// Scratch kept between updates.
+/// Where each grain's cells were last decided, and scratch kept between updates.
 #[derive(Debug, Default)]
 pub struct CoverUpdate {
+    /// Per grain: the view its cells in the map were decided for, and how far it may move
+    /// from there before a cell centre crosses its circle (0 for grains with neighbours,
+    /// whose cells are decided every time).
+    anchor: Vec<GrainView>,
+    slack: Vec<f64>,
+    /// Grains whose cells were decided and grains skipped, over all updates (the tests
+    /// check that grains are skipped at all).
+    pub decided: u64,
+    /// See `decided`.
+    pub skipped: u64,
     /// The grains that may overlap each grain.
     near: GrainNeighbours,
     /// Cells already decided in this update (cleared on exit).
@@ -48,18 +61,24 @@ pub struct CoverUpdate {
 }
 
 impl CoverUpdate {
-    /// The cells of the padded slab `f` whose owner changes when the grains `old` (the
-    /// views `owner` was built from, by [`super::map::cover`] or by this update) move to
-    /// `new` (the same grains, in the same order), appended to `out` in no particular
-    /// order. `mark` is a per-cell scratch, all false on entry and on exit. Returns false,
-    /// with `out` empty, when the update cannot be done in place: a grain moved more than
-    /// [`MAX_MOVE`] or changed size, or a periodic lattice is too small for the grains'
-    /// images to be told apart.
-    #[allow(clippy::too_many_arguments)]
+    /// The map was built afresh (by [`super::map::cover`]) for the grains `views`.
+    pub fn reset(&mut self, views: &[GrainView]) {
+        self.anchor.clear();
+        self.anchor.extend_from_slice(views);
+        self.slack.clear();
+        self.slack.resize(views.len(), 0.0);
+    }
+
+    /// The cells of the padded slab `f` whose owner changes when the grains of the map
+    /// `owner` (as last [`CoverUpdate::reset`] or updated here) move to `new` (the same
+    /// grains, in the same order), appended to `out` in no particular order. `mark` is a
+    /// per-cell scratch, all false on entry and on exit. Returns false, with `out` empty,
+    /// when the update cannot be done in place: a grain moved more than [`MAX_MOVE`] or
+    /// changed size, or a periodic lattice is too small for the grains' images to be told
+    /// apart; map afresh then.
     pub fn changes(
         &mut self,
         f: &SlabFrame,
-        old: &[GrainView],
         new: &[GrainView],
         fluid: &impl Fn(usize) -> bool,
         owner: &[u32],
@@ -67,6 +86,25 @@ impl CoverUpdate {
         out: &mut Vec<Change>,
     ) -> bool {
         out.clear();
+        let mut old = std::mem::take(&mut self.anchor);
+        let done = self.update(f, &mut old, new, fluid, owner, mark, out);
+        self.anchor = old;
+        done
+    }
+
+    /// [`CoverUpdate::changes`] from the anchors `old`, which it moves to `new` for the
+    /// grains it decides.
+    #[allow(clippy::too_many_arguments)]
+    fn update(
+        &mut self,
+        f: &SlabFrame,
+        old: &mut [GrainView],
+        new: &[GrainView],
+        fluid: &impl Fn(usize) -> bool,
+        owner: &[u32],
+        mark: &mut [bool],
+        out: &mut Vec<Change>,
+    ) -> bool {
         if old.len() != new.len() {
             return false;
         }
@@ -108,6 +146,13 @@ impl CoverUpdate {
         self.near.find(f, old, new, reach);
         for g in 0..new.len() {
             let isolated = self.near.of(g).is_empty();
+            // No cell centre can have crossed the circle of an isolated grain that moved
+            // less than its slack: its cells stay.
+            if isolated && moved(&old[g], &new[g]) < self.slack[g] - 1e-9 {
+                self.skipped += 1;
+                continue;
+            }
+            self.decided += 1;
             for &s in &self.shifts {
                 let co = [old[g].centre[0] + s[0], old[g].centre[1] + s[1]];
                 let cn = [new[g].centre[0] + s[0], new[g].centre[1] + s[1]];
@@ -166,6 +211,12 @@ impl CoverUpdate {
                     }
                 }
             }
+            old[g] = new[g];
+            self.slack[g] = if isolated {
+                slack(new[g].centre, new[g].radius)
+            } else {
+                0.0
+            };
         }
         for &k in &self.seen {
             mark[k as usize] = false;
@@ -204,6 +255,38 @@ impl CoverUpdate {
 /// centres a disk at `c` with radius `r` covers, by the very test of `map::cover`, clipped
 /// to the padded slab's columns.
 fn chord(f: &SlabFrame, c: [f64; 2], r: f64, y: i64) -> (i64, i64) {
+    let (a, b) = run(c, r, y);
+    let (xa, xb) = (f.x0 as i64 - 1, (f.x0 + f.nx) as i64);
+    (a.max(xa), b.min(xb))
+}
+
+/// How far the disk at `c` with radius `r` can move before a cell centre crosses its
+/// circle, at least (cells): |d − r| = |d² − r²| / (d + r) over the cells nearest the
+/// circle in each row (the ends of the covered run and the cells just beyond, or the
+/// cell nearest the centre's column in a row without one), where d + r < 2r + 2.
+fn slack(c: [f64; 2], r: f64) -> f64 {
+    let gap = |x: i64, y: i64| {
+        let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
+        (dx * dx + dy * dy - r * r).abs()
+    };
+    let mut s = f64::INFINITY;
+    for y in (c[1] - r).floor() as i64 - 1..=(c[1] + r).floor() as i64 + 1 {
+        let (a, b) = run(c, r, y);
+        if a <= b {
+            s = s
+                .min(gap(a - 1, y))
+                .min(gap(a, y))
+                .min(gap(b, y))
+                .min(gap(b + 1, y));
+        } else {
+            s = s.min(gap((c[0] - 0.5).round() as i64, y));
+        }
+    }
+    s / (2.0 * r + 2.0)
+}
+
+/// [`chord`] before clipping.
+fn run(c: [f64; 2], r: f64, y: i64) -> (i64, i64) {
     let dy = y as f64 + 0.5 - c[1];
     let h2 = r * r - dy * dy;
     if h2 < 0.0 {
@@ -229,8 +312,7 @@ fn chord(f: &SlabFrame, c: [f64; 2], r: f64, y: i64) -> (i64, i64) {
     if a > b {
         return EMPTY;
     }
-    let (xa, xb) = (f.x0 as i64 - 1, (f.x0 + f.nx) as i64);
-    (a.max(xa), b.min(xb))
+    (a, b)
 }
 
 /// An empty run.
@@ -271,6 +353,7 @@ mod tests {
     fn updated_map_equals_a_fresh_cover() {
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
         let (mut isolated_changes, mut crowded_changes, mut refused) = (0, 0, 0);
+        let (mut skipped, mut decided) = (0, 0);
         for case in 0..9 {
             let periodic = case % 2 == 0;
             // Round to quarter cells in the last three cases.
@@ -320,16 +403,24 @@ mod tests {
             let (mut touched, mut inner) = (Vec::new(), Vec::new());
             cover(&f, &views, fluid, &mut owner, &mut touched, &mut inner);
             let mut update = CoverUpdate::default();
+            update.reset(&views);
             let mut mark = vec![false; cells];
             let mut changes = Vec::new();
             for round in 0..80 {
-                // Mostly small moves; now and then one grain jumps more than MAX_MOVE.
+                // Small moves, a third of the grains creeping; now and then one grain
+                // jumps more than MAX_MOVE.
                 let jump = round % 17 == 16;
                 let moved: Vec<GrainView> = views
                     .iter()
                     .enumerate()
                     .map(|(n, g)| {
-                        let s = if jump && n == 5 { 3.0 } else { 0.3 };
+                        let s = if jump && n == 5 {
+                            3.0
+                        } else if n % 3 == 0 {
+                            0.01
+                        } else {
+                            0.3
+                        };
                         let mut c = [
                             quarter(g.centre[0] + 2.0 * s * (next(&mut seed) - 0.5)),
                             quarter(g.centre[1] + 2.0 * s * (next(&mut seed) - 0.5)),
@@ -342,14 +433,14 @@ mod tests {
                     })
                     .collect();
                 // A grain wrapped across a periodic seam moves a lattice length: refused.
-                let ok =
-                    update.changes(&f, &views, &moved, &fluid, &owner, &mut mark, &mut changes);
+                let ok = update.changes(&f, &moved, &fluid, &owner, &mut mark, &mut changes);
                 cover(&f, &moved, fluid, &mut fresh, &mut touched, &mut inner);
                 assert!(mark.iter().all(|m| !m), "case {case}: marks left set");
                 if !ok {
                     assert!(changes.is_empty());
                     refused += 1;
                     owner.clone_from(&fresh);
+                    update.reset(&moved);
                 } else {
                     let mut cells: Vec<u32> = changes.iter().map(|c| c.cell).collect();
                     cells.sort_unstable();
@@ -374,6 +465,7 @@ mod tests {
                 }
                 views = moved;
             }
+            (skipped, decided) = (skipped + update.skipped, decided + update.decided);
         }
         assert!(
             isolated_changes > 1000,
@@ -381,6 +473,11 @@ mod tests {
         );
         assert!(crowded_changes > 1000, "{crowded_changes} crowded changes");
         assert!((36..360).contains(&refused), "{refused} refused of 720");
+        // Isolated grains that moved less than their slack were skipped.
+        assert!(
+            skipped > decided / 20,
+            "skipped {skipped}, decided {decided}"
+        );
     }
 
     /// A periodic lattice too short to tell two grains' images apart is mapped afresh.
@@ -408,6 +505,7 @@ mod tests {
         let cells = f.stride * (f.ny + 2);
         let (owner, mut mark, mut out) = (vec![NONE; cells], vec![false; cells], Vec::new());
         let mut u = CoverUpdate::default();
-        assert!(!u.changes(&f, &[g], &[moved], &|_| true, &owner, &mut mark, &mut out));
+        u.reset(&[g]);
+        assert!(!u.changes(&f, &[moved], &|_| true, &owner, &mut mark, &mut out));
     }
 }

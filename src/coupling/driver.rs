@@ -265,7 +265,7 @@ impl LbmDem {
     }
 
     /// This rank's counts of [`super::COUNTS`] (see [`Coupler::counts`]).
-    pub fn counts(&self) -> [u64; 4] {
+    pub fn counts(&self) -> [u64; 6] {
         self.coupler.counts()
     }
 

@@ -213,6 +213,7 @@ impl Coupler {
         }
         self.mapped.clear();
         self.mapped.extend_from_slice(views);
+        self.update.reset(views);
         self.owner_ids.clear();
         self.owner_ids.extend_from_slice(ids);
         self.handover.reset(views, self.frame.global_nx);
@@ -236,12 +237,14 @@ impl Coupler {
     }
 
     /// This rank's counts of [`super::COUNTS`]: remaps done in place and afresh, grains
-    /// whose boundary lists were kept and rescanned (bounce-back schemes; all zero with
-    /// PSM).
-    pub fn counts(&self) -> [u64; 4] {
+    /// whose cells an update in place decided and skipped, grains whose boundary lists
+    /// were kept and rescanned (bounce-back schemes; all zero with PSM).
+    pub fn counts(&self) -> [u64; 6] {
         [
             self.in_place_remaps,
             self.fresh_remaps,
+            self.update.decided,
+            self.update.skipped,
             self.lists.kept,
             self.lists.rescanned,
         ]

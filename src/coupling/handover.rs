@@ -43,7 +43,6 @@ impl Coupler {
             self.owner_ids == ids
                 && self.update.changes(
                     &f,
-                    &self.mapped,
                     views,
                     &|k| lat.is_fluid_at(k),
                     &self.owner,
@@ -56,6 +55,7 @@ impl Coupler {
         } else {
             self.fresh_remaps += 1;
             self.changes_afresh(fluid.lattice(), views, ids);
+            self.update.reset(views);
         }
         self.passes[super::pass::MAP] += t.elapsed().as_secs_f64();
         let t = std::time::Instant::now();

@@ -36,11 +36,14 @@ pub use driver::{LbmDem, RestoredCoupling};
 pub const PASSES: [&str; 6] = ["plan", "collect", "reduce", "map", "handover", "lists"];
 
 /// What the coupling counts over a run (summed over ranks in `summary.json`): remaps of
-/// the cover map done in place and afresh (`cover_update.rs`), and grains whose boundary
-/// lists were kept and rescanned (`boundary_lists.rs`). Bounce-back schemes only.
-pub const COUNTS: [&str; 4] = [
+/// the cover map done in place and afresh, grains whose cells those in place decided and
+/// skipped (`cover_update.rs`), and grains whose boundary lists were kept and rescanned
+/// (`boundary_lists.rs`). Bounce-back schemes only.
+pub const COUNTS: [&str; 6] = [
     "remaps_in_place",
     "remaps_afresh",
+    "grains_decided",
+    "grains_skipped",
     "lists_kept",
     "lists_rescanned",
 ];
