@@ -68,26 +68,28 @@ pub fn disk_rectangle_area(centre: [f64; 2], radius: f64, lo: [f64; 2], hi: [f64
     }
     let cuts = &mut cuts[..n];
     cuts.sort_by(f64::total_cmp);
+    // The chord integral at each cut, computed once (neighbouring pieces share a cut).
+    let mut at: [Option<f64>; 6] = [None; 6];
+    let mut chord = |j: usize| *at[j].get_or_insert_with(|| half_chord_integral(cuts[j], r));
     let mut area = 0.0;
-    for w in cuts.windows(2) {
-        let (a, b) = (w[0], w[1]);
+    for j in 0..n - 1 {
+        let (a, b) = (cuts[j], cuts[j + 1]);
         if b <= a {
             continue;
         }
         // Which bound is active is constant on (a, b): decide at the midpoint.
         let m = 0.5 * (a + b);
         let h = (r * r - m * m).max(0.0).sqrt();
-        let chord = |s: f64| half_chord_integral(s, r);
         // Top: y1 if y1 < h else +√; bottom: y0 if y0 > −h else −√.
         let top = if y1 < h {
             y1 * (b - a)
         } else {
-            chord(b) - chord(a)
+            chord(j + 1) - chord(j)
         };
         let bottom = if y0 > -h {
             y0 * (b - a)
         } else {
-            -(chord(b) - chord(a))
+            -(chord(j + 1) - chord(j))
         };
         if y1.min(h) > y0.max(-h) {
             area += top - bottom;
