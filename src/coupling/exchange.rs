@@ -89,10 +89,13 @@ pub struct Coupler {
     pub(super) boundary_row: Vec<u32>,
     /// Each grain's boundary cells, kept between remaps (`boundary_lists.rs`).
     pub(super) lists: super::boundary_lists::BoundaryLists,
-    /// Solid fractions (partially saturated method), grain by grain, and the same in plan
-    /// order (by row, then cell).
-    pub(super) shares: Vec<Share>,
+    /// Solid fractions (partially saturated method) by row, then (once planned) by cell.
     pub(super) sorted: Vec<Share>,
+    /// Each grain image's rows (grain, image centre, row), and their order by row with
+    /// where each row starts.
+    pub(super) row_images: Vec<(u32, [f64; 2], u32)>,
+    pub(super) image_order: Vec<u32>,
+    pub(super) image_rows: Vec<u32>,
     /// Scratch marks per padded cell (all false between uses).
     pub(super) mark: Vec<bool>,
     /// The plans of the last exchange and where each link or share belongs.
@@ -145,8 +148,10 @@ impl Coupler {
             boundary_mask: Vec::new(),
             boundary_row: Vec::new(),
             lists: Default::default(),
-            shares: Vec::new(),
             sorted: Vec::new(),
+            row_images: Vec::new(),
+            image_order: Vec::new(),
+            image_rows: Vec::new(),
             mark: vec![false; cells],
             links: LinkPlan::default(),
             link_grain: Vec::new(),
@@ -255,7 +260,7 @@ impl Coupler {
         out.fill(0.0);
         match self.scheme {
             Scheme::Psm => {
-                for s in &self.shares {
+                for s in &self.sorted {
                     let e = &mut out[s.cell as usize];
                     *e = (*e + s.fraction).min(1.0);
                 }

@@ -238,50 +238,64 @@ pub struct Share {
     pub centre: [f64; 2],
 }
 
-/// Visit the shares of grain `g` of `grains`: every interior plain-fluid cell it overlaps,
-/// image by image, in row order, with its exact solid fraction when `exact` (0 otherwise:
-/// the counting pass of a parallel build). Cells wholly inside or outside skip the exact
-/// area.
-pub fn for_shares(
+/// Visit the shares in row `y` of grain `g` seen at image centre `c`: every interior
+/// plain-fluid cell of that row it overlaps, in increasing x, with its exact solid fraction
+/// when `exact` (0 otherwise: the counting pass of a parallel build). Cells wholly inside
+/// or outside skip the exact area. `rank` is left 0.
+#[allow(clippy::too_many_arguments)]
+pub fn shares_in_row(
     frame: &SlabFrame,
     fluid: &impl Fn(usize) -> bool,
-    grains: &[GrainView],
+    grain: &GrainView,
     g: usize,
+    c: [f64; 2],
+    y: i64,
     exact: bool,
     mut visit: impl FnMut(Share),
 ) {
-    let grain = &grains[g];
-    for c in frame.images(grain) {
-        frame.for_box(c, grain.radius, |k, x, y| {
-            if x < 0 || y < 0 || x >= frame.nx as i64 || y >= frame.ny as i64 || !fluid(k) {
-                return;
-            }
-            let (gx, r) = ((x + frame.x0 as i64) as f64, grain.radius);
-            // Nearest and farthest points of the cell from the centre.
-            let near = |lo: f64, v: f64| (v - lo.max(v.min(lo + 1.0))).abs();
-            let far = |lo: f64, v: f64| (v - lo).abs().max((v - lo - 1.0).abs());
-            let (nx_, ny_) = (near(gx, c[0]), near(y as f64, c[1]));
-            if nx_ * nx_ + ny_ * ny_ >= r * r {
-                return;
-            }
-            let fraction = if !exact {
-                0.0
+    let r = grain.radius;
+    let x0 = frame.x0 as i64;
+    let xa = ((c[0] - r).floor() as i64 - x0).max(0);
+    let xb = ((c[0] + r).floor() as i64 - x0).min(frame.nx as i64 - 1);
+    // Nearest and farthest points of the cell from the centre.
+    let near = |lo: f64, v: f64| (v - lo.max(v.min(lo + 1.0))).abs();
+    let far = |lo: f64, v: f64| (v - lo).abs().max((v - lo - 1.0).abs());
+    for x in xa..=xb {
+        let k = frame.padded(x, y);
+        if !fluid(k) {
+            continue;
+        }
+        let gx = (x + x0) as f64;
+        let (nx_, ny_) = (near(gx, c[0]), near(y as f64, c[1]));
+        if nx_ * nx_ + ny_ * ny_ >= r * r {
+            continue;
+        }
+        let fraction = if !exact {
+            0.0
+        } else {
+            let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
+            if fx_ * fx_ + fy_ * fy_ <= r * r {
+                1.0
             } else {
-                let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
-                if fx_ * fx_ + fy_ * fy_ <= r * r {
-                    1.0
-                } else {
-                    cell_fraction(c, r, x + frame.x0 as i64, y)
-                }
-            };
-            visit(Share {
-                cell: k as u32,
-                row: y as u32,
-                rank: 0,
-                grain: g as u32,
-                fraction,
-                centre: c,
-            });
+                cell_fraction(c, r, x + x0, y)
+            }
+        };
+        visit(Share {
+            cell: k as u32,
+            row: y as u32,
+            rank: 0,
+            grain: g as u32,
+            fraction,
+            centre: c,
         });
     }
+}
+
+/// The interior rows (first, last; empty when first > last) a disk at `c` with radius `r`
+/// can overlap.
+pub fn share_rows(frame: &SlabFrame, c: [f64; 2], r: f64) -> (i64, i64) {
+    (
+        ((c[1] - r).floor() as i64).max(0),
+        ((c[1] + r).floor() as i64).min(frame.ny as i64 - 1),
+    )
 }

@@ -4,63 +4,83 @@
 
 use super::exchange::{Coupler, Unstable};
 use super::gather::{gather, group_by_row};
-use super::map::{for_shares, GrainView, Share};
+use super::map::{share_rows, shares_in_row, GrainView, Share};
 use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
 use rayon::prelude::*;
 
 impl Coupler {
-    /// The solid fraction of every interior fluid cell each grain overlaps, grain by grain
-    /// (id order), each image's cells in row order; in parallel over the grains.
+    /// The solid fraction of every interior fluid cell each grain overlaps, row by row
+    /// (in parallel over the rows), each row's grains in id order, each grain's images in
+    /// turn, cells in increasing x: the grain-by-grain list, grouped by row. Fills `sorted`
+    /// (each share's `rank` is its place in its row) and `offsets` (where each row starts).
     pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let fluid = |k: usize| lat.is_fluid_at(k);
+        // Each grain image's rows, then grouped by row (grain order within a row).
+        self.row_images.clear();
+        for (g, grain) in views.iter().enumerate() {
+            for c in f.images(grain) {
+                let (ya, yb) = share_rows(&f, c, grain.radius);
+                for y in ya..=yb {
+                    self.row_images.push((g as u32, c, y as u32));
+                }
+            }
+        }
+        let images = &self.row_images;
+        group_by_row(
+            images.len(),
+            f.ny,
+            |i| images[i].2 as usize,
+            &mut self.image_rows,
+            &mut self.image_order,
+        );
+        let (starts, order) = (&self.image_rows, &self.image_order);
+        let in_row = |y: usize| {
+            order[starts[y] as usize..starts[y + 1] as usize]
+                .iter()
+                .map(|&i| &images[i as usize])
+        };
         gather(
-            views.len(),
+            f.ny,
             &mut self.offsets,
-            &mut self.shares,
-            |g| {
+            &mut self.sorted,
+            |y| {
                 let mut n = 0;
-                for_shares(&f, &fluid, views, g, false, |_| n += 1);
+                for &(g, c, _) in in_row(y) {
+                    let grain = &views[g as usize];
+                    shares_in_row(&f, &fluid, grain, g as usize, c, y as i64, false, |_| {
+                        n += 1
+                    });
+                }
                 n
             },
-            |g, out| {
+            |y, out| {
                 let mut at = 0;
-                for_shares(&f, &fluid, views, g, true, |s| {
-                    out[at] = s;
-                    at += 1;
-                });
+                for &(g, c, _) in in_row(y) {
+                    let grain = &views[g as usize];
+                    shares_in_row(&f, &fluid, grain, g as usize, c, y as i64, true, |s| {
+                        // Keep the grain order among shares of one cell: tag with the
+                        // share's place in the row.
+                        out[at] = Share {
+                            rank: at as u32,
+                            ..s
+                        };
+                        at += 1;
+                    });
+                }
             },
         );
     }
 
-    /// Group the shares by row, then by cell within a row (cells in increasing x, each
-    /// cell's shares in grain order), and plan the partially saturated collision. The order
-    /// is the restriction of a partition-independent one (rows, then global x).
+    /// Group the shares by cell within each row (cells in increasing x, each cell's shares
+    /// in grain order), and plan the partially saturated collision. The order is the
+    /// restriction of a partition-independent one (rows, then global x).
     pub(super) fn plan_psm<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let tau = lat.tau0();
         let plan = &mut self.psm;
-        // Shares by row (stable: grain order within a row), copied into row order so that
-        // every later pass reads them in sequence; then by cell within each row.
-        {
-            let shares = &self.shares;
-            group_by_row(
-                shares.len(),
-                f.ny,
-                |s| shares[s].row as usize,
-                &mut self.offsets,
-                &mut self.order,
-            );
-        }
         let sorted = &mut self.sorted;
-        sorted.clear();
-        sorted.extend(self.order.iter().map(|&s| {
-            let mut sh = self.shares[s as usize];
-            // Keep the grain order among shares of one cell: tag with the share's rank.
-            sh.rank = s;
-            sh
-        }));
         {
             let offsets = &self.offsets;
             let mut rows: Vec<&mut [Share]> = Vec::with_capacity(f.ny);
