@@ -200,14 +200,7 @@ mod tests {
     use super::*;
     use crate::coupling::cover_update::CoverUpdate;
     use crate::coupling::map::cover;
-
-    /// A small deterministic generator (no test-only crate needed).
-    fn next(s: &mut u64) -> f64 {
-        *s ^= *s << 13;
-        *s ^= *s >> 7;
-        *s ^= *s << 17;
-        (*s >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::coupling::test_slabs::{next, slab};
 
     /// Over many remaps of crowded, touching, moving grains (some leaving and entering the
     /// view, some crossing the slab's faces and periodic seams, next to solid cells), the
@@ -217,18 +210,8 @@ mod tests {
     fn kept_lists_equal_a_full_rescan() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
         for case in 0..6 {
-            let periodic = case % 2 == 0;
-            let f = SlabFrame {
-                nx: 70 + case,
-                ny: 60,
-                x0: 23 * (case % 3),
-                global_nx: 160,
-                stride: 70 + case + 2,
-                periodic_x: periodic,
-                periodic_y: periodic,
-            };
-            let cells = f.stride * (f.ny + 2);
-            let solid: Vec<bool> = (0..cells).map(|k| k % 89 == 7).collect();
+            let (f, solid) = slab(case);
+            let cells = solid.len();
             let fluid = |k: usize| !solid[k];
             // Grains with ids 0..40; a few drift fast, the rest barely move.
             let mut all: Vec<GrainView> = (0..40)

@@ -335,14 +335,7 @@ fn minus(p: (i64, i64), q: (i64, i64)) -> [(i64, i64); 2] {
 mod tests {
     use super::*;
     use crate::coupling::map::cover;
-
-    /// A small deterministic generator (no test-only crate needed).
-    fn next(s: &mut u64) -> f64 {
-        *s ^= *s << 13;
-        *s ^= *s >> 7;
-        *s ^= *s << 17;
-        (*s >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::coupling::test_slabs::{next, slab};
 
     /// Over many moves of crowded, overlapping grains (slabs with and without periodic
     /// faces, next to solid cells, grains crossing the slab's faces; in the last cases on
@@ -355,7 +348,6 @@ mod tests {
         let (mut isolated_changes, mut crowded_changes, mut refused) = (0, 0, 0);
         let (mut skipped, mut decided) = (0, 0);
         for case in 0..9 {
-            let periodic = case % 2 == 0;
             // Round to quarter cells in the last three cases.
             let quarter = |v: f64| {
                 if case >= 6 {
@@ -364,17 +356,8 @@ mod tests {
                     v
                 }
             };
-            let f = SlabFrame {
-                nx: 70 + case,
-                ny: 60,
-                x0: 23 * (case % 3),
-                global_nx: 160,
-                stride: 70 + case + 2,
-                periodic_x: periodic,
-                periodic_y: periodic,
-            };
-            let cells = f.stride * (f.ny + 2);
-            let solid: Vec<bool> = (0..cells).map(|k| k % 89 == 7).collect();
+            let (f, solid) = slab(case);
+            let (cells, periodic) = (solid.len(), f.periodic_x);
             let fluid = |k: usize| !solid[k];
             // Half the grains in a cluster that overlaps, half spread out.
             let mut views: Vec<GrainView> = (0..40)

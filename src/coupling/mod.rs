@@ -26,6 +26,8 @@ pub mod map;
 pub mod plan;
 mod psm;
 pub mod sums;
+#[cfg(test)]
+mod test_slabs;
 
 pub use driver::{LbmDem, RestoredCoupling};
 
