@@ -108,7 +108,6 @@ pub struct Coupler {
     pub(super) share_momentum: Vec<[f64; 2]>,
     pub(super) rest: Vec<[f64; 2]>,
     pub(super) offsets: Vec<u32>,
-    pub(super) candidates: Vec<u32>,
     /// Plan cells grouped by row: indices into the cell list.
     pub(super) order: Vec<u32>,
     /// Cells changing hands in the last remap, and their refills and momenta.
@@ -160,7 +159,6 @@ impl Coupler {
             share_momentum: Vec::new(),
             rest: Vec::new(),
             offsets: Vec::new(),
-            candidates: Vec::new(),
             order: Vec::new(),
             refills: Vec::new(),
             newly: Vec::new(),

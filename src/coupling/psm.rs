@@ -95,75 +95,89 @@ impl Coupler {
                 .for_each(|r| r.sort_unstable_by_key(|sh| (sh.cell, sh.rank)));
         }
         let shares = &*sorted;
-        // Cell groups: where each cell's shares start.
-        plan.cells.clear();
-        plan.start.clear();
-        plan.rows.clear();
-        plan.rows.push(0);
-        let mut y = 0;
-        for (j, sh) in shares.iter().enumerate() {
-            while y < sh.row as usize {
-                plan.rows.push(plan.cells.len() as u32);
-                y += 1;
-            }
-            if j == 0 || shares[j - 1].cell != sh.cell {
-                plan.cells.push(sh.cell);
-                plan.start.push(j as u32);
-            }
-        }
-        while plan.rows.len() <= f.ny {
-            plan.rows.push(plan.cells.len() as u32);
-        }
-        plan.start.push(shares.len() as u32);
-        let start = &plan.start;
-        let eps_of = |c: usize| -> f64 {
-            shares[start[c] as usize..start[c + 1] as usize]
-                .iter()
-                .map(|sh| sh.fraction)
-                .sum()
-        };
-        (0..plan.cells.len())
+        let offsets = &self.offsets;
+        // Cells per row (a row's shares are sorted by cell), then where each row's cells
+        // start.
+        (0..f.ny)
             .into_par_iter()
-            .with_min_len(256)
-            .map(|c| {
-                let e = eps_of(c).min(1.0);
-                // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
-                e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5))
+            .with_min_len(16)
+            .map(|y| {
+                let row = &shares[offsets[y] as usize..offsets[y + 1] as usize];
+                row.iter()
+                    .enumerate()
+                    .filter(|&(j, sh)| j == 0 || row[j - 1].cell != sh.cell)
+                    .count() as u32
             })
-            .collect_into_vec(&mut plan.total);
-        let (cells, totals) = (&plan.cells, &plan.total);
-        let fill = |c: usize, out: &mut [SolidShare]| {
-            let eps = eps_of(c);
-            let first = &shares[start[c] as usize];
-            let centre = f.centre_in_row(first.cell as usize, first.row as usize);
-            let group = &shares[start[c] as usize..start[c + 1] as usize];
-            for (j, sh) in group.iter().enumerate() {
-                let grain = &views[sh.grain as usize];
-                out[j] = SolidShare {
-                    // A cell whose overlap rounds to nothing stays plain fluid.
-                    b: if eps > 0.0 {
-                        totals[c] * sh.fraction / eps
-                    } else {
-                        0.0
-                    },
-                    velocity: GrainView {
-                        centre: sh.centre,
-                        ..*grain
-                    }
-                    .surface_velocity(centre),
-                };
-            }
-        };
-        // Plan share s is `sorted[s]`: its grain and image are read from there later.
-        let mut offsets = std::mem::take(&mut self.candidates);
-        gather(
-            cells.len(),
-            &mut offsets,
-            &mut plan.shares,
-            |c| (start[c + 1] - start[c]) as usize,
-            fill,
+            .collect_into_vec(&mut plan.rows);
+        let mut cells = 0u32;
+        for r in plan.rows.iter_mut() {
+            (*r, cells) = (cells, cells + *r);
+        }
+        plan.rows.push(cells);
+        let cells = cells as usize;
+        plan.cells.resize(cells, 0);
+        plan.start.resize(cells + 1, 0);
+        plan.start[cells] = shares.len() as u32;
+        plan.total.resize(cells, 0.0);
+        plan.shares.resize(shares.len(), SolidShare::default());
+        // Then each row's cells, their weights and their shares, in parallel over rows.
+        let rows = &plan.rows;
+        let mut parts = Vec::with_capacity(f.ny);
+        let (mut c_cells, mut c_start, mut c_total) = (
+            plan.cells.as_mut_slice(),
+            plan.start.as_mut_slice(),
+            plan.total.as_mut_slice(),
         );
-        self.candidates = offsets;
+        let mut c_shares = plan.shares.as_mut_slice();
+        for y in 0..f.ny {
+            let n = (rows[y + 1] - rows[y]) as usize;
+            let m = (offsets[y + 1] - offsets[y]) as usize;
+            let (a, ta) = std::mem::take(&mut c_cells).split_at_mut(n);
+            let (b, tb) = std::mem::take(&mut c_start).split_at_mut(n);
+            let (c, tc) = std::mem::take(&mut c_total).split_at_mut(n);
+            let (d, td) = std::mem::take(&mut c_shares).split_at_mut(m);
+            parts.push((y, a, b, c, d));
+            (c_cells, c_start, c_total, c_shares) = (ta, tb, tc, td);
+        }
+        parts
+            .into_par_iter()
+            .with_min_len(16)
+            .for_each(|(y, cells, start, total, out)| {
+                let first = offsets[y] as usize;
+                let row = &shares[first..offsets[y + 1] as usize];
+                let (mut c, mut j) = (0, 0);
+                while j < row.len() {
+                    let mut end = j + 1;
+                    while end < row.len() && row[end].cell == row[j].cell {
+                        end += 1;
+                    }
+                    let group = &row[j..end];
+                    let eps: f64 = group.iter().map(|sh| sh.fraction).sum();
+                    let e = eps.min(1.0);
+                    // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
+                    let b = e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5));
+                    let centre = f.centre_in_row(row[j].cell as usize, y);
+                    for (s, sh) in group.iter().enumerate() {
+                        let grain = &views[sh.grain as usize];
+                        out[j + s] = SolidShare {
+                            // A cell whose overlap rounds to nothing stays plain fluid.
+                            b: if eps > 0.0 {
+                                b * sh.fraction / eps
+                            } else {
+                                0.0
+                            },
+                            velocity: GrainView {
+                                centre: sh.centre,
+                                ..*grain
+                            }
+                            .surface_velocity(centre),
+                        };
+                    }
+                    (cells[c], start[c], total[c]) = (row[j].cell, (first + j) as u32, b);
+                    (c, j) = (c + 1, end);
+                }
+            });
+        // Plan share s is `sorted[s]`: its grain and image are read from there later.
     }
 
     /// Add each share's momentum (as the sweep reported it) to its grain's column sums, in
