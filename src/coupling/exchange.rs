@@ -107,6 +107,7 @@ pub struct Coupler {
     pub(super) link_momentum: Vec<f64>,
     pub(super) share_momentum: Vec<[f64; 2]>,
     pub(super) rest: Vec<[f64; 2]>,
+    /// PSM: where each row's shares start in `sorted` (kept from the map to the plan).
     pub(super) offsets: Vec<u32>,
     /// Plan cells grouped by row: indices into the cell list.
     pub(super) order: Vec<u32>,

@@ -228,7 +228,8 @@ pub struct Share {
     pub cell: u32,
     /// Its local row.
     pub row: u32,
-    /// Its place in the list it was made in (for stable orders after copies).
+    /// Its place in its row as mapped (keeps the grain order among a cell's shares when
+    /// the row is sorted by cell).
     pub rank: u32,
     /// Grain index.
     pub grain: u32,
