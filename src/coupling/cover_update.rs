@@ -86,25 +86,8 @@ impl CoverUpdate {
         out: &mut Vec<Change>,
     ) -> bool {
         out.clear();
-        let mut old = std::mem::take(&mut self.anchor);
-        let done = self.update(f, &mut old, new, fluid, owner, mark, out);
-        self.anchor = old;
-        done
-    }
-
-    /// [`CoverUpdate::changes`] from the anchors `old`, which it moves to `new` for the
-    /// grains it decides.
-    #[allow(clippy::too_many_arguments)]
-    fn update(
-        &mut self,
-        f: &SlabFrame,
-        old: &mut [GrainView],
-        new: &[GrainView],
-        fluid: &impl Fn(usize) -> bool,
-        owner: &[u32],
-        mark: &mut [bool],
-        out: &mut Vec<Change>,
-    ) -> bool {
+        // The anchors: where each grain's cells in `owner` were decided.
+        let old = &mut self.anchor;
         if old.len() != new.len() {
             return false;
         }
@@ -198,7 +181,7 @@ impl CoverUpdate {
                                 }
                                 mark[k] = true;
                                 self.seen.push(k as u32);
-                                let to = self.decide(new, g, x, y);
+                                let to = decide(&self.near, &self.shifts, new, g, x, y);
                                 if owner[k] != to {
                                     out.push(Change {
                                         cell: k as u32,
@@ -224,31 +207,38 @@ impl CoverUpdate {
         self.seen.clear();
         true
     }
+}
 
-    /// The owner of global cell (x, y) for the grains `views` under the rule of
-    /// `map::cover` (nearest centre, lower index on a tie), looked for among grain `g` and
-    /// its neighbours; the cell lies in g's disk before or after the move, so every grain
-    /// that covers it is among them.
-    fn decide(&self, views: &[GrainView], g: usize, x: i64, y: i64) -> u32 {
-        let near = self.near.of(g);
-        let (mut best, mut bd) = (NONE, f64::INFINITY);
-        for h in std::iter::once(g as u32).chain(near.iter().copied()) {
-            let v = &views[h as usize];
-            for s in &self.shifts {
-                let c = [v.centre[0] + s[0], v.centre[1] + s[1]];
-                if !covers(c, v.radius, x, y) {
-                    continue;
-                }
-                // The same distance `cover` compares (cell centre minus image centre).
-                let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
-                let d = dx * dx + dy * dy;
-                if d < bd || (d == bd && h < best) {
-                    (best, bd) = (h, d);
-                }
+/// The owner of global cell (x, y) for the grains `views` under the rule of
+/// `map::cover` (nearest centre, lower index on a tie), looked for among grain `g` and
+/// its neighbours; the cell lies in g's disk before or after the move, so every grain
+/// that covers it is among them.
+fn decide(
+    near: &GrainNeighbours,
+    shifts: &[[f64; 2]],
+    views: &[GrainView],
+    g: usize,
+    x: i64,
+    y: i64,
+) -> u32 {
+    let near = near.of(g);
+    let (mut best, mut bd) = (NONE, f64::INFINITY);
+    for h in std::iter::once(g as u32).chain(near.iter().copied()) {
+        let v = &views[h as usize];
+        for s in shifts {
+            let c = [v.centre[0] + s[0], v.centre[1] + s[1]];
+            if !covers(c, v.radius, x, y) {
+                continue;
+            }
+            // The same distance `cover` compares (cell centre minus image centre).
+            let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
+            let d = dx * dx + dy * dy;
+            if d < bd || (d == bd && h < best) {
+                (best, bd) = (h, d);
             }
         }
-        best
     }
+    best
 }
 
 /// The run of cells (global x, first and last; empty when first > last) of row `y` whose

@@ -18,7 +18,7 @@
 //! what makes fluid + grain momentum conserved to round-off (tested).
 
 use super::cover_update::{Change, CoverUpdate};
-use super::map::{cover, set_cells, GrainView, Share, SlabFrame, NONE};
+use super::map::{cover, for_owned, set_cells, GrainView, Share, SlabFrame, NONE};
 use super::sums::ColumnSums;
 use super::{Refill, Scheme};
 use crate::lbm::moving::{LinkPlan, MovingCells, PsmPlan};
@@ -266,16 +266,11 @@ impl Coupler {
             }
             _ => {
                 let f = self.frame;
-                for (g, grain) in self.mapped.iter().enumerate() {
-                    for c in f.images(grain) {
-                        f.for_box(c, grain.radius, |k, x, y| {
-                            let inside = x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64;
-                            if inside && self.owner[k] == g as u32 {
-                                out[k] = 1.0;
-                            }
-                        });
+                for_owned(&f, &self.mapped, &self.owner, |k, x, y| {
+                    if x >= 0 && y >= 0 && x < f.nx as i64 && y < f.ny as i64 {
+                        out[k] = 1.0;
                     }
-                }
+                });
             }
         }
     }

@@ -188,18 +188,34 @@ pub fn set_cells(
     out: &mut Vec<u32>,
 ) {
     out.clear();
+    for_owned(frame, views, owner, |k, _, _| {
+        if !mark[k] {
+            mark[k] = true;
+            out.push(k as u32);
+        }
+    });
+    for &k in out.iter() {
+        mark[k as usize] = false;
+    }
+}
+
+/// Visit every cell each grain of `views` owns in `owner` (padded index, local x, y),
+/// grain by grain, each image's box row by row; a cell seen through two images of one
+/// grain (on a lattice smaller than a grain's box) is visited twice.
+pub fn for_owned(
+    frame: &SlabFrame,
+    views: &[GrainView],
+    owner: &[u32],
+    mut visit: impl FnMut(usize, i64, i64),
+) {
     for (g, grain) in views.iter().enumerate() {
         for c in frame.images(grain) {
-            frame.for_box(c, grain.radius, |k, _, _| {
-                if owner[k] == g as u32 && !mark[k] {
-                    mark[k] = true;
-                    out.push(k as u32);
+            frame.for_box(c, grain.radius, |k, x, y| {
+                if owner[k] == g as u32 {
+                    visit(k, x, y);
                 }
             });
         }
-    }
-    for &k in out.iter() {
-        mark[k as usize] = false;
     }
 }
 
