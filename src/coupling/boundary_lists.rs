@@ -2,7 +2,7 @@
 //! only for grains near a cell that changed hands.
 //!
 //! A grain's list (the interior fluid cells no grain covers that neighbour one of its
-//! cells, each with its link mask) depends only on the cover map within two cells of the
+//! cells, each with its link masks) depends only on the cover map within two cells of the
 //! cells it owns. So when a remap changes the owner of cell e, only the grains owning a
 //! cell within two cells of e (before or after) can see their list change; the others keep
 //! theirs. Grains whose box comes within three cells of the slab's edge are always
@@ -15,9 +15,24 @@ use super::map::{GrainView, SlabFrame, NONE};
 use crate::lbm::d2q9::Q;
 use rayon::prelude::*;
 
-/// One boundary entry: padded cell, link mask (bit i − 1 set where the neighbour at x − c_i
-/// is covered by any grain), local row.
-pub(super) type Entry = (u32, u8, u32);
+/// One boundary cell of a grain's list, with everything about its links that the cover
+/// map decides (so the plan reads no map for a kept list). Bit i − 1 of each mask is about
+/// direction i.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(super) struct Entry {
+    /// Padded cell.
+    pub cell: u32,
+    /// Local row.
+    pub row: u32,
+    /// Links: the neighbour at x − c_i is covered by a grain.
+    pub links: u8,
+    /// Links whose covering grain is not the one the entry is listed with (the lowest
+    /// index among the cell's neighbours' owners).
+    pub foreign: u8,
+    /// The neighbour at x + c_i is fluid and covered by no grain (interpolated
+    /// bounce-back below ½ reads it).
+    pub plain: u8,
+}
 
 /// The grains' boundary lists and which must be rescanned.
 #[derive(Debug, Default)]
@@ -99,15 +114,14 @@ impl BoundaryLists {
         self.dirty.iter_mut().for_each(|d| *d = true);
     }
 
-    /// Rescan the dirty grains and those near the slab's edge (in parallel), then visit
-    /// every grain's entries in grain order. All grains are clean afterwards.
+    /// Rescan the dirty grains and those near the slab's edge (in parallel). All grains are
+    /// clean afterwards.
     pub fn rebuild(
         &mut self,
         f: &SlabFrame,
         owner: &[u32],
         fluid: &(impl Fn(usize) -> bool + Sync),
         views: &[GrainView],
-        mut visit: impl FnMut(Entry),
     ) {
         debug_assert_eq!(self.lists.len(), views.len(), "call follow first");
         let dirty = &self.dirty;
@@ -128,9 +142,14 @@ impl BoundaryLists {
         self.rescanned += rescanned;
         self.kept += views.len() as u64 - rescanned;
         self.dirty.iter_mut().for_each(|d| *d = false);
-        for e in self.lists.iter().flatten() {
-            visit(*e);
-        }
+    }
+
+    /// Every grain's entries in grain order, each with the grain's index.
+    pub fn entries(&self) -> impl Iterator<Item = (u32, &Entry)> {
+        self.lists
+            .iter()
+            .enumerate()
+            .flat_map(|(g, list)| list.iter().map(move |e| (g as u32, e)))
     }
 }
 
@@ -171,18 +190,33 @@ pub(super) fn boundary_of(
             if !interior || owner[k] != NONE || !fluid(k) {
                 return;
             }
-            let (mut mask, mut first) = (0u8, NONE);
+            let (mut links, mut first) = (0u8, NONE);
+            let mut owners = [NONE; Q];
             for i in 1..Q {
-                let o = owner[neighbour(f, k, i, -1)];
-                mask |= ((o != NONE) as u8) << (i - 1);
-                first = first.min(o);
+                owners[i] = owner[neighbour(f, k, i, -1)];
+                links |= ((owners[i] != NONE) as u8) << (i - 1);
+                first = first.min(owners[i]);
             }
             let gx = x + f.x0 as i64;
             let seen = earlier[..images]
                 .iter()
                 .any(|b| (b[0]..=b[1]).contains(&gx) && (b[2]..=b[3]).contains(&y));
             if first == g as u32 && !seen {
-                visit((k as u32, mask, y as u32));
+                let (mut foreign, mut plain) = (0u8, 0u8);
+                for i in 1..Q {
+                    let other = owners[i] != NONE && owners[i] != first;
+                    foreign |= (other as u8) << (i - 1);
+                    let ahead = neighbour(f, k, i, 1);
+                    let open = owner[ahead] == NONE && fluid(ahead);
+                    plain |= (open as u8) << (i - 1);
+                }
+                visit(Entry {
+                    cell: k as u32,
+                    row: y as u32,
+                    links,
+                    foreign,
+                    plain,
+                });
             }
         });
         earlier[images] = [
@@ -237,7 +271,7 @@ mod tests {
             let mut lists = BoundaryLists::default();
             let mut update = CoverUpdate::default();
             let (mut mark, mut changes) = (vec![false; cells], Vec::new());
-            let mut in_place = 0;
+            let (mut in_place, mut foreign, mut plain_below) = (0, 0, 0);
             for round in 0..60 {
                 // Grain 3 leaves the view for rounds 20..30, grain 11 for 40..45.
                 let hidden = |id: usize| {
@@ -278,23 +312,43 @@ mod tests {
                 }
                 ids = new_ids;
                 let mut kept = Vec::new();
-                lists.rebuild(&f, &owner, &fluid, &views, |e| kept.push(e));
+                lists.rebuild(&f, &owner, &fluid, &views);
+                kept.extend(lists.entries().map(|(g, e)| (g, *e)));
                 let mut full = Vec::new();
                 for g in 0..views.len() {
-                    boundary_of(&f, &owner, &fluid, &views, g, |e| full.push(e));
+                    boundary_of(&f, &owner, &fluid, &views, g, |e| full.push((g as u32, e)));
                 }
                 assert_eq!(kept, full, "case {case}, round {round}");
                 // Every boundary cell is listed once, with one grain.
-                let mut cells: Vec<u32> = full.iter().map(|e| e.0).collect();
+                let mut cells: Vec<u32> = full.iter().map(|e| e.1.cell).collect();
                 cells.sort_unstable();
                 cells.dedup();
                 assert_eq!(cells.len(), full.len(), "case {case}, round {round}");
                 assert!(full.len() > 200, "case {case}: {} entries", full.len());
+                // Each entry's masks say what the map says around its cell.
+                for &(g, e) in &full {
+                    let k = e.cell as usize;
+                    for i in 1..Q {
+                        let bit = 1u8 << (i - 1);
+                        let behind = owner[crate::coupling::exchange::neighbour(&f, k, i, -1)];
+                        let ahead = crate::coupling::exchange::neighbour(&f, k, i, 1);
+                        assert_eq!(e.links & bit != 0, behind != NONE);
+                        assert_eq!(e.foreign & bit != 0, behind != NONE && behind != g);
+                        assert_eq!(e.plain & bit != 0, owner[ahead] == NONE && fluid(ahead));
+                    }
+                    foreign += e.foreign.count_ones();
+                    plain_below += (e.plain != 0xff) as u32;
+                }
                 for (g, d) in all.iter_mut().zip(&step) {
                     g.centre = [g.centre[0] + d[0], g.centre[1] + d[1]];
                 }
             }
             assert!(in_place > 30, "case {case}: {in_place} remaps in place");
+            // Crowded grains share boundary cells; solid cells or grains sit upstream.
+            assert!(
+                foreign > 0 && plain_below > 0,
+                "case {case}: {foreign}, {plain_below}"
+            );
             assert!(
                 lists.kept > lists.rescanned / 4,
                 "case {case}: kept {} rescanned {}",

@@ -81,12 +81,12 @@ pub struct Coupler {
     pub(super) old_cells: Vec<u32>,
     pub(super) new_cells: Vec<u32>,
     pub(super) scratch: Vec<u32>,
-    /// Interior exterior-fluid cells with at least one covered neighbour.
-    pub(super) boundary: Vec<u32>,
-    /// Per boundary cell: bit i − 1 set where its neighbour at x − c_i is covered.
-    pub(super) boundary_mask: Vec<u8>,
-    /// Per boundary cell: its local row.
-    pub(super) boundary_row: Vec<u32>,
+    /// Interior exterior-fluid cells with at least one covered neighbour, with their links.
+    pub(super) boundary: Vec<super::boundary_lists::Entry>,
+    /// Per boundary cell: the grain it is listed with.
+    pub(super) boundary_grain: Vec<u32>,
+    /// Where each row's boundary cells start (ny + 1 values; empty with PSM).
+    pub(super) boundary_rows: Vec<u32>,
     /// Each grain's boundary cells, kept between remaps (`boundary_lists.rs`).
     pub(super) lists: super::boundary_lists::BoundaryLists,
     /// Solid fractions (partially saturated method) by row, then (once planned) by cell.
@@ -109,8 +109,8 @@ pub struct Coupler {
     pub(super) rest: Vec<[f64; 2]>,
     /// PSM: where each row's shares start in `sorted` (kept from the map to the plan).
     pub(super) offsets: Vec<u32>,
-    /// Plan cells grouped by row: indices into the cell list.
-    pub(super) order: Vec<u32>,
+    /// Scratch: the next slot of each row while grouping the boundary cells by row.
+    pub(super) row_next: Vec<u32>,
     /// Cells changing hands in the last remap, and their refills and momenta.
     pub(super) refills: Vec<crate::lbm::moving::Refill>,
     pub(super) newly: Vec<u32>,
@@ -145,8 +145,8 @@ impl Coupler {
             new_cells: Vec::new(),
             scratch: Vec::new(),
             boundary: Vec::new(),
-            boundary_mask: Vec::new(),
-            boundary_row: Vec::new(),
+            boundary_grain: Vec::new(),
+            boundary_rows: Vec::new(),
             lists: Default::default(),
             sorted: Vec::new(),
             row_images: Vec::new(),
@@ -160,7 +160,7 @@ impl Coupler {
             share_momentum: Vec::new(),
             rest: Vec::new(),
             offsets: Vec::new(),
-            order: Vec::new(),
+            row_next: Vec::new(),
             refills: Vec::new(),
             newly: Vec::new(),
             cell_momentum: Vec::new(),
@@ -283,7 +283,7 @@ impl Coupler {
         let t = std::time::Instant::now();
         match self.scheme {
             Scheme::Psm => self.plan_psm(lat, views),
-            _ => self.plan_links(lat, views),
+            _ => self.plan_links(views),
         }
         self.passes[super::pass::PLAN] += t.elapsed().as_secs_f64();
     }

@@ -99,14 +99,14 @@ pub fn group_by_row(
 
 /// A raw pointer that tasks writing disjoint ranges may share.
 #[derive(Clone, Copy)]
-struct Shared<I>(*mut I);
+pub(super) struct Shared<I>(pub(super) *mut I);
 // SAFETY: only used for disjoint writes (see `gather`).
 unsafe impl<I> Send for Shared<I> {}
 unsafe impl<I> Sync for Shared<I> {}
 
 impl<I> Shared<I> {
     /// The pointer (a method, so closures capture the whole `Send` wrapper).
-    fn get(&self) -> *mut I {
+    pub(super) fn get(&self) -> *mut I {
         self.0
     }
 }

@@ -1,71 +1,83 @@
 //! Bounce-back schemes: the fluid cells next to a grain (its *boundary*), the plan of their
 //! links to it, and the loads they hand to each grain.
 
+use super::boundary_lists::Entry;
 use super::exchange::{neighbour, Coupler, Unstable};
-use super::gather::{gather2, group_by_row};
-use super::map::{nearest_image, GrainView, NONE};
+use super::gather::gather2;
+use super::map::{nearest_image, GrainView};
 use super::Scheme;
 use crate::lbm::d2q9::{CX, CY, Q, W};
 use crate::lbm::moving::MovingLink;
 use crate::lbm::{Lattice, Real};
 
 impl Coupler {
-    /// The boundary cell list from `owner` (for the grains `views` it was built from):
-    /// grain by grain (id order), each image's cells in row order, the interior fluid cells
-    /// no grain covers that neighbour a cell of that grain; a cell next to several grains is
-    /// listed with the first (`boundary_lists::boundary_of`). The order is the restriction
-    /// of a partition-independent order. Each grain's cells are rescanned only where the
-    /// last remap could have changed them (see `boundary_lists.rs`).
+    /// The boundary cell list from `owner` (for the grains `views` it was built from),
+    /// grouped by row: the interior fluid cells no grain covers that neighbour a covered
+    /// cell, each listed with the first grain among its neighbours' owners
+    /// (`boundary_lists::boundary_of`); within a row, grain by grain (id order), each
+    /// grain's cells in scan order. Each grain's cells are rescanned only where the last
+    /// remap could have changed them (see `boundary_lists.rs`).
     pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         self.boundary.clear();
-        self.boundary_mask.clear();
-        self.boundary_row.clear();
+        self.boundary_grain.clear();
+        self.boundary_rows.clear();
         if self.scheme == Scheme::Psm {
             return;
         }
         let f = self.frame;
-        let owner = &self.owner;
         let fluid = |k: usize| lat.is_fluid_at(k);
-        let boundary = &mut self.boundary;
-        let (masks, rows) = (&mut self.boundary_mask, &mut self.boundary_row);
-        self.lists
-            .rebuild(&f, owner, &fluid, views, |(k, mask, y)| {
-                boundary.push(k);
-                masks.push(mask);
-                rows.push(y);
-            });
+        self.lists.rebuild(&f, &self.owner, &fluid, views);
+        // A stable counting sort by row: the plan then reads the list in order.
+        let rows = &mut self.boundary_rows;
+        rows.resize(f.ny + 1, 0);
+        for (_, e) in self.lists.entries() {
+            rows[e.row as usize + 1] += 1;
+        }
+        for y in 0..f.ny {
+            rows[y + 1] += rows[y];
+        }
+        let n = rows[f.ny] as usize;
+        self.boundary.resize(n, Entry::default());
+        self.boundary_grain.resize(n, 0);
+        self.row_next.clear();
+        self.row_next.extend_from_slice(&rows[..f.ny]);
+        for (g, e) in self.lists.entries() {
+            let slot = &mut self.row_next[e.row as usize];
+            self.boundary[*slot as usize] = *e;
+            self.boundary_grain[*slot as usize] = g;
+            *slot += 1;
+        }
     }
 
     /// Plan the boundary cells' links (half-way or interpolated bounce-back with the grain's
-    /// surface velocity), grouped by row for the sweep.
-    pub(super) fn plan_links<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
+    /// surface velocity), in the list's order (grouped by row for the sweep). The map is
+    /// read only for links to a grain other than the one a cell is listed with: the lists
+    /// hold the rest.
+    pub(super) fn plan_links(&mut self, views: &[GrainView]) {
         let f = self.frame;
         let interpolated = self.scheme == Scheme::Interpolated;
-        let (owner, boundary, masks) = (&self.owner, &self.boundary, &self.boundary_mask);
-        let rows = &self.boundary_row;
-        group_by_row(
-            boundary.len(),
-            f.ny,
-            |c| rows[c] as usize,
-            &mut self.links.rows,
-            &mut self.order,
-        );
-        let order = &self.order;
+        let (owner, boundary) = (&self.owner, &self.boundary);
+        let listed = &self.boundary_grain;
+        self.links.rows.clone_from(&self.boundary_rows);
         // One pass per cell to count its links, one to write them (in parallel, in order).
         gather2(
-            order.len(),
+            boundary.len(),
             &mut self.links.start,
             &mut self.links.links,
             &mut self.link_grain,
-            |c| masks[order[c] as usize].count_ones() as usize,
-            |c, out, own| {
-                let b = order[c] as usize;
-                let k = boundary[b] as usize;
-                let mask = masks[b];
-                let centre = f.centre_in_row(k, rows[b] as usize);
-                let dirs = (1..Q).filter(|&i| mask & (1 << (i - 1)) != 0);
+            |b| boundary[b].links.count_ones() as usize,
+            |b, out, own| {
+                let e = boundary[b];
+                let k = e.cell as usize;
+                let centre = f.centre_in_row(k, e.row as usize);
+                let dirs = (1..Q).filter(|&i| e.links & (1 << (i - 1)) != 0);
                 for (at, i) in dirs.enumerate() {
-                    let g = owner[neighbour(&f, k, i, -1)];
+                    let bit = 1u8 << (i - 1);
+                    let g = if e.foreign & bit != 0 {
+                        owner[neighbour(&f, k, i, -1)]
+                    } else {
+                        listed[b]
+                    };
                     let grain = &views[g as usize];
                     let (cx, cy) = (CX[i] as f64, CY[i] as f64);
                     let (mid, image) = link_midpoint(&f, centre, i, grain);
@@ -77,12 +89,10 @@ impl Coupler {
                     let q = if interpolated {
                         let q =
                             super::geometry::link_fraction(centre, [-cx, -cy], image, grain.radius);
-                        let ff = neighbour(&f, k, i, 1);
                         // Interpolation below ½ needs a plain fluid cell upstream. Both
-                        // tests are evaluated and combined without a branch: which way
-                        // `q < 0.5` goes is unpredictable, and it waits on a square root.
-                        let upstream = lat.is_fluid_at(ff) & (owner[ff] == NONE);
-                        let half = (q < 0.5) & !upstream;
+                        // tests are combined without a branch: which way `q < 0.5` goes
+                        // is unpredictable, and it waits on a square root.
+                        let half = (q < 0.5) & (e.plain & bit == 0);
                         [q, 0.5][half as usize]
                     } else {
                         0.5
@@ -99,13 +109,11 @@ impl Coupler {
             },
         );
         self.links.cells.clear();
-        self.links
-            .cells
-            .extend(order.iter().map(|&o| boundary[o as usize]));
+        self.links.cells.extend(boundary.iter().map(|e| e.cell));
     }
 
     /// Add each link's momentum (as the sweep reported it) to its grain's column sums, in
-    /// plan order: the grain receives −(f*_ī + f_i) c_i (seed eq. 5.47) at the link's
+    /// plan order (in parallel over bands of columns): the grain receives −(f*_ī + f_i) c_i (seed eq. 5.47) at the link's
     /// midpoint (torque, eq. 5.48). Maps the first bad plan cell to (cell, grain, density).
     pub(super) fn collect_links(
         &mut self,
@@ -113,24 +121,32 @@ impl Coupler {
         bad: Option<(usize, f64)>,
     ) -> Option<Unstable> {
         let f = self.frame;
-        let rows = &self.links.rows;
-        for y in 0..rows.len().saturating_sub(1) {
-            for c in rows[y] as usize..rows[y + 1] as usize {
-                let k = self.links.cells[c] as usize;
-                let col = (f.x_in_row(k, y) + f.x0 as i64) as usize;
-                let centre = f.centre_in_row(k, y);
-                for l in self.links.start[c] as usize..self.links.start[c + 1] as usize {
-                    let (i, m) = (self.links.links[l].dir as usize, self.link_momentum[l]);
-                    let g = self.link_grain[l] as usize;
-                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                    let (mid, image) = link_midpoint(&f, centre, i, &views[g]);
-                    let arm = [mid[0] - image[0], mid[1] - image[1]];
-                    let (px, py) = (-m * cx, -m * cy);
-                    let load = [px, py, arm[0] * py - arm[1] * px];
-                    self.sums.add(g, views[g].centre[0], image[0], col, load);
+        let (plan, grains, momentum) = (&self.links, &self.link_grain, &self.link_momentum);
+        let rows = &plan.rows;
+        let columns = f.x0..f.x0 + f.nx;
+        self.sums
+            .fill_by_columns(columns.start, columns.end, |band, sums| {
+                for y in 0..rows.len().saturating_sub(1) {
+                    for c in rows[y] as usize..rows[y + 1] as usize {
+                        let k = plan.cells[c] as usize;
+                        let col = (f.x_in_row(k, y) + f.x0 as i64) as usize;
+                        if !band.contains(&col) {
+                            continue;
+                        }
+                        let centre = f.centre_in_row(k, y);
+                        for l in plan.start[c] as usize..plan.start[c + 1] as usize {
+                            let (i, m) = (plan.links[l].dir as usize, momentum[l]);
+                            let g = grains[l] as usize;
+                            let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                            let (mid, image) = link_midpoint(&f, centre, i, &views[g]);
+                            let arm = [mid[0] - image[0], mid[1] - image[1]];
+                            let (px, py) = (-m * cx, -m * cy);
+                            let load = [px, py, arm[0] * py - arm[1] * px];
+                            sums.add(g, views[g].centre[0], image[0], col, load);
+                        }
+                    }
                 }
-            }
-        }
+            });
         bad.map(|(c, rho)| {
             let l = self.links.start[c] as usize;
             (self.links.cells[c] as usize, self.link_grain[l], rho)

@@ -181,28 +181,34 @@ impl Coupler {
     }
 
     /// Add each share's momentum (as the sweep reported it) to its grain's column sums, in
-    /// plan order. Maps the first bad plan cell to (cell, grain, density).
+    /// plan order (in parallel over bands of columns). Maps the first bad plan cell to
+    /// (cell, grain, density).
     pub(super) fn collect_psm(
         &mut self,
         views: &[GrainView],
         bad: Option<(usize, f64)>,
     ) -> Option<Unstable> {
         let f = self.frame;
-        for (c, &k) in self.psm.cells.iter().enumerate() {
-            let y = self.sorted[self.psm.start[c] as usize].row as usize;
-            let col = (f.x_in_row(k as usize, y) + f.x0 as i64) as usize;
-            let centre = f.centre_in_row(k as usize, y);
-            for s in self.psm.start[c] as usize..self.psm.start[c + 1] as usize {
-                // Plan share s is sorted share s: its grain and the image it sees.
-                let (sh, p) = (&self.sorted[s], self.share_momentum[s]);
-                let g = sh.grain as usize;
-                let arm = [centre[0] - sh.centre[0], centre[1] - sh.centre[1]];
-                // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
-                let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
-                self.sums
-                    .add(g, views[g].centre[0], sh.centre[0], col, load);
+        let (plan, sorted, momentum) = (&self.psm, &self.sorted, &self.share_momentum);
+        self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
+            for (c, &k) in plan.cells.iter().enumerate() {
+                let y = sorted[plan.start[c] as usize].row as usize;
+                let col = (f.x_in_row(k as usize, y) + f.x0 as i64) as usize;
+                if !band.contains(&col) {
+                    continue;
+                }
+                let centre = f.centre_in_row(k as usize, y);
+                for s in plan.start[c] as usize..plan.start[c + 1] as usize {
+                    // Plan share s is sorted share s: its grain and the image it sees.
+                    let (sh, p) = (&sorted[s], momentum[s]);
+                    let g = sh.grain as usize;
+                    let arm = [centre[0] - sh.centre[0], centre[1] - sh.centre[1]];
+                    // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
+                    let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
+                    sums.add(g, views[g].centre[0], sh.centre[0], col, load);
+                }
             }
-        }
+        });
         bad.map(|(c, rho)| {
             let s = self.psm.start[c] as usize;
             (self.psm.cells[c] as usize, self.sorted[s].grain, rho)

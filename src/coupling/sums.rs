@@ -7,6 +7,7 @@
 //! a rank-independent order, see `exchange.rs`), and the grain's owner adds the partial sums
 //! in global column order, its own and those that other ranks sent it alike.
 
+use super::gather::Shared;
 use super::map::GrainView;
 
 /// Momentum (x, y) and torque handed to a grain, lattice units.
@@ -53,6 +54,18 @@ impl ColumnSums {
     /// a lattice width across a periodic face).
     #[inline]
     pub fn add(&mut self, g: usize, grain_x: f64, image_x: f64, column: usize, load: Load) {
+        let at = self.slot(g, grain_x, image_x, column);
+        let s = &mut self.sums[at];
+        s[0] += load[0];
+        s[1] += load[1];
+        s[2] += load[2];
+        self.used[at] = true;
+    }
+
+    /// The slot of grain `g`'s partial sum of `column` (as [`ColumnSums::add`]). Different
+    /// columns of one slab give different slots: they differ by less than a lattice width.
+    #[inline]
+    fn slot(&self, g: usize, grain_x: f64, image_x: f64, column: usize) -> usize {
         // The column as seen from the grain's own centre (undo the image's shift).
         let shift = if grain_x == image_x {
             0
@@ -61,12 +74,34 @@ impl ColumnSums {
         };
         let slot = column as i64 + shift - self.base[g];
         let at = self.first[g] + slot as usize;
-        debug_assert!(at < self.first[g + 1], "column outside the grain's window");
-        let s = &mut self.sums[at];
-        s[0] += load[0];
-        s[1] += load[1];
-        s[2] += load[2];
-        self.used[at] = true;
+        assert!(at < self.first[g + 1], "column outside the grain's window");
+        at
+    }
+
+    /// Fill the sums in parallel, one task per band of the global columns `lo..hi`:
+    /// `fill(band, adder)` adds (with [`Adder::add`]) the loads of the band's columns, in
+    /// the order one serial fill would add them. Bands hold different columns, hence
+    /// different slots, so every slot gets its loads in the serial order: the same bits.
+    pub fn fill_by_columns<F>(&mut self, lo: usize, hi: usize, fill: F)
+    where
+        F: Fn(std::ops::Range<usize>, &Adder<'_>) + Sync,
+    {
+        use rayon::prelude::*;
+        let bands = rayon::current_num_threads().clamp(1, (hi - lo).max(1));
+        let (sums, used) = (
+            Shared(self.sums.as_mut_ptr()),
+            Shared(self.used.as_mut_ptr()),
+        );
+        let this = &*self;
+        (0..bands).into_par_iter().for_each(|b| {
+            let band = lo + (hi - lo) * b / bands..lo + (hi - lo) * (b + 1) / bands;
+            let adder = Adder {
+                sums: this,
+                band: band.clone(),
+                out: (sums, used),
+            };
+            fill(band, &adder);
+        });
     }
 
     /// Grain `g`'s partial sums as (global column, load), in increasing column.
@@ -79,6 +114,32 @@ impl ColumnSums {
             }
         }
         out.sort_unstable_by_key(|p| p.0);
+    }
+}
+
+/// Adds loads to the columns of one band of a [`ColumnSums::fill_by_columns`].
+pub struct Adder<'a> {
+    sums: &'a ColumnSums,
+    band: std::ops::Range<usize>,
+    out: (Shared<Load>, Shared<bool>),
+}
+
+impl Adder<'_> {
+    /// As [`ColumnSums::add`], for a column of this band (panics otherwise).
+    #[inline]
+    pub fn add(&self, g: usize, grain_x: f64, image_x: f64, column: usize, load: Load) {
+        assert!(self.band.contains(&column), "column outside the band");
+        let at = self.sums.slot(g, grain_x, image_x, column);
+        // SAFETY: `at` is in bounds (`slot` checks it against the grain's window); only
+        // this band's task adds to columns of the band, and their slots are no other
+        // column's (see `slot`); nothing else reads the sums during the fill.
+        unsafe {
+            let s = &mut *self.out.0.get().add(at);
+            s[0] += load[0];
+            s[1] += load[1];
+            s[2] += load[2];
+            *self.out.1.get().add(at) = true;
+        }
     }
 }
 
@@ -150,5 +211,65 @@ mod tests {
         let mut merged: Vec<_> = pb.into_iter().chain(pa).collect();
         let split = total(&mut merged);
         assert_eq!(whole.map(f64::to_bits), split.map(f64::to_bits));
+    }
+
+    /// Loads added in parallel over bands of columns give the bits of one serial fill,
+    /// whatever the number of bands; a load outside its band is refused.
+    #[test]
+    fn banded_fill_matches_a_serial_fill() {
+        let gs: Vec<GrainView> = (0..7).map(|n| grain(8.0 + 13.0 * n as f64)).collect();
+        // (grain, column, load), several per slot, in one fixed order.
+        let loads: Vec<(usize, usize, Load)> = (0..3000)
+            .map(|k| {
+                let g = (k * 7919) % gs.len();
+                let col = (gs[g].centre[0] as i64 - 5 + ((k * 31) % 11) as i64) as usize;
+                let v = 1.0 / (k as f64 + 1.7);
+                (g, col, [v, -v * 3.1, (k as f64).sqrt() * v])
+            })
+            .collect();
+        let mut serial = ColumnSums::default();
+        serial.reset(&gs, 100);
+        for &(g, c, l) in &loads {
+            serial.add(g, gs[g].centre[0], gs[g].centre[0], c, l);
+        }
+        let mut want = Vec::new();
+        for threads in [1, 2, 3, 5] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool");
+            let mut banded = ColumnSums::default();
+            banded.reset(&gs, 100);
+            pool.install(|| {
+                banded.fill_by_columns(0, 100, |band, adder| {
+                    for &(g, c, l) in loads.iter().filter(|x| band.contains(&x.1)) {
+                        adder.add(g, gs[g].centre[0], gs[g].centre[0], c, l);
+                    }
+                })
+            });
+            for g in 0..gs.len() {
+                let (mut a, mut b) = (Vec::new(), Vec::new());
+                serial.partials(g, &mut a);
+                banded.partials(g, &mut b);
+                want.push(a.len());
+                let bits = |p: &[(u32, Load)]| -> Vec<(u32, [u64; 3])> {
+                    p.iter().map(|x| (x.0, x.1.map(f64::to_bits))).collect()
+                };
+                assert_eq!(bits(&a), bits(&b), "{threads} threads, grain {g}");
+            }
+        }
+        assert!(want.iter().all(|&n| n > 5));
+        let refused = std::panic::catch_unwind(|| {
+            let mut s = ColumnSums::default();
+            s.reset(&gs, 100);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .build()
+                .expect("pool");
+            pool.install(|| {
+                s.fill_by_columns(0, 100, |_, adder| adder.add(0, 8.0, 8.0, 7, [1.0; 3]))
+            });
+        });
+        assert!(refused.is_err(), "a load outside its band is added");
     }
 }
