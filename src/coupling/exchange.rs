@@ -63,9 +63,11 @@ pub struct Coupler {
     pub(super) scheme: Scheme,
     pub(super) refill: Refill,
     pub(super) frame: SlabFrame,
-    /// Covering grain per padded cell (bounce-back schemes): an index into `owner_ids`.
+    /// Covering grain per padded cell (bounce-back schemes; empty with PSM): an index into
+    /// `owner_ids`.
     pub(super) owner: Vec<u32>,
-    /// A map built afresh when the grains in view change (all [`NONE`] between remaps).
+    /// A map built afresh when the grains in view change (all [`NONE`] between remaps;
+    /// empty until the first such remap).
     pub(super) next_owner: Vec<u32>,
     /// Ids and views of the grains `owner` refers to (the views of the last map).
     pub(super) owner_ids: Vec<u64>,
@@ -96,7 +98,7 @@ pub struct Coupler {
     pub(super) row_images: Vec<(u32, [f64; 2], u32)>,
     pub(super) image_order: Vec<u32>,
     pub(super) image_rows: Vec<u32>,
-    /// Scratch marks per padded cell (all false between uses).
+    /// Scratch marks per padded cell (all false between uses; bounce-back schemes).
     pub(super) mark: Vec<bool>,
     /// The plans of the last exchange and where each link or share belongs.
     pub(super) links: LinkPlan,
@@ -128,13 +130,18 @@ pub struct Coupler {
 impl Coupler {
     /// A coupler on the slab `frame`. Place the grains with [`Coupler::start`].
     pub fn new(scheme: Scheme, refill: Refill, frame: SlabFrame) -> Self {
-        let cells = frame.stride * (frame.ny + 2);
+        // Per-cell maps for the bounce-back schemes only; the second map only once a remap
+        // needs it (`handover.rs`).
+        let cells = match scheme {
+            Scheme::Psm => 0,
+            _ => frame.stride * (frame.ny + 2),
+        };
         Self {
             scheme,
             refill,
             frame,
             owner: vec![NONE; cells],
-            next_owner: vec![NONE; cells],
+            next_owner: Vec::new(),
             owner_ids: Vec::new(),
             mapped: Vec::new(),
             update: CoverUpdate::default(),

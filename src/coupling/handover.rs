@@ -166,6 +166,9 @@ impl Coupler {
             &mut self.old_cells,
         );
         self.new_cells.clear();
+        if self.next_owner.len() != self.owner.len() {
+            self.next_owner = vec![NONE; self.owner.len()];
+        }
         cover(
             &f,
             views,
