@@ -62,8 +62,9 @@ impl ColumnSums {
         self.used[at] = true;
     }
 
-    /// The slot of grain `g`'s partial sum of `column` (as [`ColumnSums::add`]). Different
-    /// columns of one slab give different slots: they differ by less than a lattice width.
+    /// The slot of grain `g`'s partial sum of `column` (as [`ColumnSums::add`]), inside the
+    /// grain's own window (panics otherwise). Different columns of one slab give different
+    /// slots: they differ by less than a lattice width.
     #[inline]
     fn slot(&self, g: usize, grain_x: f64, image_x: f64, column: usize) -> usize {
         // The column as seen from the grain's own centre (undo the image's shift).
@@ -73,9 +74,12 @@ impl ColumnSums {
             ((grain_x - image_x) / self.global_nx as f64).round() as i64 * self.global_nx
         };
         let slot = column as i64 + shift - self.base[g];
-        let at = self.first[g] + slot as usize;
-        assert!(at < self.first[g + 1], "column outside the grain's window");
-        at
+        let width = (self.first[g + 1] - self.first[g]) as i64;
+        assert!(
+            (0..width).contains(&slot),
+            "column outside the grain's window"
+        );
+        self.first[g] + slot as usize
     }
 
     /// Fill the sums in parallel, one task per band of the global columns `lo..hi`:
@@ -130,7 +134,7 @@ impl Adder<'_> {
     pub fn add(&self, g: usize, grain_x: f64, image_x: f64, column: usize, load: Load) {
         assert!(self.band.contains(&column), "column outside the band");
         let at = self.sums.slot(g, grain_x, image_x, column);
-        // SAFETY: `at` is in bounds (`slot` checks it against the grain's window); only
+        // SAFETY: `at` is in bounds, in grain g's window (`slot` checks it); only
         // this band's task adds to columns of the band, and their slots are no other
         // column's (see `slot`); nothing else reads the sums during the fill.
         unsafe {
@@ -271,5 +275,13 @@ mod tests {
             });
         });
         assert!(refused.is_err(), "a load outside its band is added");
+        // Left of the grain's window (columns 14..=28 for the disk at x = 21, r = 4):
+        // refused, not added to the last slot of the grain before it.
+        let outside = std::panic::catch_unwind(|| {
+            let mut s = ColumnSums::default();
+            s.reset(&gs, 100);
+            s.add(1, 21.0, 21.0, 13, [1.0; 3]);
+        });
+        assert!(outside.is_err(), "a load left of the window is added");
     }
 }
