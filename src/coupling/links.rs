@@ -18,17 +18,16 @@ impl Coupler {
     /// grain's cells in scan order. Each grain's cells are rescanned only where the last
     /// remap could have changed them (see `boundary_lists.rs`).
     pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
-        self.boundary.clear();
-        self.boundary_grain.clear();
-        self.boundary_rows.clear();
         if self.scheme == Scheme::Psm {
             return;
         }
         let f = self.frame;
         let fluid = |k: usize| lat.is_fluid_at(k);
         self.lists.rebuild(&f, &self.owner, &fluid, views);
-        // A stable counting sort by row: the plan then reads the list in order.
+        // A stable counting sort by row: the plan then reads the list in order. Every slot
+        // of the list is written below, so only its length is set first.
         let rows = &mut self.boundary_rows;
+        rows.clear();
         rows.resize(f.ny + 1, 0);
         for (_, e) in self.lists.entries() {
             rows[e.row as usize + 1] += 1;
