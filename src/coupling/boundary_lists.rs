@@ -15,8 +15,8 @@ use super::map::{GrainView, SlabFrame, NONE};
 use crate::lbm::d2q9::Q;
 use rayon::prelude::*;
 
-/// One boundary cell of a grain's list, with everything about its links that the cover
-/// map decides (so the plan reads no map for a kept list). Bit i − 1 of each mask is about
+/// One boundary cell of a grain's list, with what the cover map decides about its links
+/// (so the plan reads the map only for foreign links). Bit i − 1 of each mask is about
 /// direction i.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(super) struct Entry {
