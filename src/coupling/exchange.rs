@@ -102,8 +102,9 @@ pub struct Coupler {
     pub(super) mark: Vec<bool>,
     /// The plans of the last exchange and where each link or share belongs.
     pub(super) links: LinkPlan,
-    /// The grain (view) of each link; its image and arm are recomputed where needed.
-    pub(super) link_grain: Vec<u32>,
+    /// The grain (view) of each of the link plan's bodies, and each view's first body.
+    pub(super) body_grain: Vec<u32>,
+    pub(super) body_start: Vec<u32>,
     pub(super) psm: PsmPlan,
     /// Momentum per link or share of the last exchange, and scratch lists.
     pub(super) link_momentum: Vec<f64>,
@@ -161,7 +162,8 @@ impl Coupler {
             image_rows: Vec::new(),
             mark: vec![false; cells],
             links: LinkPlan::default(),
-            link_grain: Vec::new(),
+            body_grain: Vec::new(),
+            body_start: Vec::new(),
             psm: PsmPlan::default(),
             link_momentum: Vec::new(),
             share_momentum: Vec::new(),

@@ -222,19 +222,28 @@ pub fn for_owned(
 /// The image of grain `g` nearest to point `p`.
 #[inline]
 pub fn nearest_image(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] {
+    nearest_image_at(frame, g, p).1
+}
+
+/// The image of grain `g` nearest to point `p` and its index among `frame.images(g)` (the
+/// first of equally near ones); `(0, g.centre)` in a frame with no periodic axis or where
+/// no image reaches the slab.
+#[inline]
+pub fn nearest_image_at(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> (usize, [f64; 2]) {
     if !frame.periodic_x && !frame.periodic_y {
-        return g.centre;
+        return (0, g.centre);
     }
-    let mut best = g.centre;
+    let (mut best, mut at) = (g.centre, 0);
     let mut bd = f64::INFINITY;
-    for c in frame.images(g) {
+    for (j, c) in frame.images(g).enumerate() {
         let d = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2);
         if d < bd {
             bd = d;
             best = c;
+            at = j;
         }
     }
-    best
+    (at, best)
 }
 
 /// One grain's share of one cell for the partially saturated method.

@@ -206,10 +206,11 @@ impl<T: Real> GpuFluid<T> {
                 idx.extend_from_slice(&[n as u32, l as u32]);
                 idx.extend_from_slice(&plan.cells);
                 idx.extend_from_slice(&plan.start);
-                idx.extend(plan.links.iter().map(|k| k.dir as u32));
+                idx.extend(plan.links.iter().map(|k| k.dir() as u32));
+                let (q, wall) = plan.fractions_and_walls(self.host_mut().stride);
                 let mut real = Vec::with_capacity(3 * l);
-                real.extend(plan.links.iter().map(|k| T::from_f64(k.q)));
-                real.extend(plan.links.iter().map(|k| T::from_f64(k.wall)));
+                real.extend(q.iter().map(|&v| T::from_f64(v)));
+                real.extend(wall.iter().map(|&v| T::from_f64(v)));
                 real.extend(std::iter::repeat_n(T::default(), l));
                 self.run_moving(Kernel::Links, prev, n, &idx, &real);
                 mom.clear();

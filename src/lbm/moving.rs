@@ -1,6 +1,6 @@
 //! Moving solid surfaces that live outside the fluid core (grains, see `coupling/`), as
 //! plain cell lists the core executes after a sweep. Nothing here knows about grains: a
-//! plan names cells, links, wall velocities and solid fractions in lattice units, and the
+//! plan names cells, links, rigid motions and solid fractions in lattice units, and the
 //! backend (this file for the CPU, `gpu/` for a device) recomputes those cells and reports
 //! the momentum each link or solid share received, in plan order.
 //!
@@ -14,31 +14,59 @@
 
 use super::boundary::{Access, Src};
 use super::collision::{equilibrium, Collider, Moments};
-use super::d2q9::{CX, CY, OPP, Q};
+use super::d2q9::{CX, CY, OPP, Q, W};
 use super::lattice::{is_plain, Lattice, Layout};
 use super::partial_lanes::{partial_cells, LANES};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// One link of a fluid cell to a moving surface: population `dir` enters the cell from its
-/// solid neighbour at x − c_dir.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct MovingLink {
+/// solid neighbour at x − c_dir, which belongs to the rigid body `body` of the plan. Packed
+/// in four bytes (the plan is rewritten every step, so its size is its cost).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct MovingLink(u32);
+
+impl MovingLink {
+    /// The link of direction `dir` (1..=8) to body `body` (< 2²⁸).
+    #[inline]
+    pub fn new(dir: usize, body: u32) -> Self {
+        debug_assert!((1..Q).contains(&dir) && body < 1 << 28);
+        Self(body << 4 | dir as u32)
+    }
+
     /// The incoming population (1..=8).
-    pub dir: u8,
-    /// Where the link meets the surface, as a fraction of the link from the cell centre
-    /// (½: half-way bounce-back). Below ½ the post-collision value of the fluid neighbour
-    /// at x + c_dir is interpolated, so the planner must give ½ where that neighbour is not
-    /// plain fluid outside every surface.
-    pub q: f64,
-    /// Ladd's moving-wall term 2 w_i ρ_w (c_i·u_w)/c_s², ρ_w = 1 (Ladd 1994, eq. 3.3).
-    pub wall: f64,
+    #[inline]
+    pub fn dir(self) -> usize {
+        (self.0 & 15) as usize
+    }
+
+    /// Index of the body in [`LinkPlan::bodies`].
+    #[inline]
+    pub fn body(self) -> usize {
+        (self.0 >> 4) as usize
+    }
+}
+
+/// The rigid motion of one moving surface, lattice units: the wall's velocity at a point p
+/// is u + ω × (p − c) (seed eq. 5.46).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RigidMotion {
+    /// Velocity u of the centre (cells per step).
+    pub velocity: [f64; 2],
+    /// Angular velocity ω (radians per step, counter-clockwise).
+    pub omega: f64,
+    /// Centre c (global lattice coordinates: cell (x, y) spans [x, x+1) × [y, y+1)).
+    pub centre: [f64; 2],
 }
 
 /// Fluid cells next to moving surfaces with their links, compressed by cell: the links of
 /// `cells[c]` are `links[start[c]..start[c + 1]]`. Cells are padded indices of interior
 /// plain-fluid cells, each at most once, grouped by row: row y's are
 /// `cells[rows[y]..rows[y + 1]]` (any order within a row).
+///
+/// The moving-wall term of each link is computed by the executing sweep from its body's
+/// rigid motion at the link's midpoint ([`LinkPlan::wall`]), so the plan holds four bytes
+/// per link (twelve with interpolation).
 #[derive(Debug, Clone, Default)]
 pub struct LinkPlan {
     /// Offsets of each row's cells (ny + 1 values; empty for an empty plan).
@@ -49,6 +77,15 @@ pub struct LinkPlan {
     pub start: Vec<u32>,
     /// The links, cell by cell.
     pub links: Vec<MovingLink>,
+    /// Where each link meets the surface, as a fraction q of the link from the cell centre,
+    /// one per link; empty when every link is half-way (q = ½). Below ½ the post-collision
+    /// value of the fluid neighbour at x + c_dir is interpolated, so the planner must give
+    /// ½ where that neighbour is not plain fluid outside every surface.
+    pub fractions: Vec<f64>,
+    /// The rigid motions the links refer to.
+    pub bodies: Vec<RigidMotion>,
+    /// Global x of local column 0 (a cell's centre is (x0 + x + ½, y + ½)).
+    pub x0: i64,
 }
 
 impl LinkPlan {
@@ -59,6 +96,56 @@ impl LinkPlan {
         self.start.clear();
         self.start.push(0);
         self.links.clear();
+        self.fractions.clear();
+        self.bodies.clear();
+    }
+
+    /// The fraction q of link `l` (see [`LinkPlan::fractions`]).
+    #[inline]
+    pub fn q(&self, l: usize) -> f64 {
+        if self.fractions.is_empty() {
+            0.5
+        } else {
+            self.fractions[l]
+        }
+    }
+
+    /// Ladd's moving-wall term 2 w_i ρ_w (c_i·u_w)/c_s², ρ_w = 1, of `link` from the cell at
+    /// padded index `k` in local row `y` of a lattice with row stride `stride` (Ladd 1994,
+    /// eq. 3.3; seed eq. 5.45): u_w is the body's velocity at the link's midpoint.
+    #[inline]
+    pub fn wall(&self, stride: usize, k: usize, y: usize, link: MovingLink) -> f64 {
+        let i = link.dir();
+        let b = &self.bodies[link.body()];
+        let x = k as i64 - ((y + 1) * stride) as i64 - 1;
+        let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+        let mid = [
+            (x + self.x0) as f64 + 0.5 - 0.5 * cx,
+            y as f64 + 0.5 - 0.5 * cy,
+        ];
+        let r = [mid[0] - b.centre[0], mid[1] - b.centre[1]];
+        // Seed eq. 5.46: u_w = u + ω × r.
+        let u = [
+            b.velocity[0] - b.omega * r[1],
+            b.velocity[1] + b.omega * r[0],
+        ];
+        6.0 * W[i] * (cx * u[0] + cy * u[1])
+    }
+
+    /// Every link's q and wall term, in plan order (for backends that take them as data).
+    pub fn fractions_and_walls(&self, stride: usize) -> (Vec<f64>, Vec<f64>) {
+        let n = self.links.len();
+        let (mut q, mut wall) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for y in 0..self.rows.len().saturating_sub(1) {
+            for n in self.rows[y] as usize..self.rows[y + 1] as usize {
+                let k = self.cells[n] as usize;
+                for l in self.start[n] as usize..self.start[n + 1] as usize {
+                    q.push(self.q(l));
+                    wall.push(self.wall(stride, k, y, self.links[l]));
+                }
+            }
+        }
+        (q, wall)
     }
 }
 
@@ -227,7 +314,7 @@ impl<'a> MovingRun<'a> {
         );
         let dst = Disjoint(dst);
         for n in self.row_cells(lat, y, edge_pass) {
-            let (h, ok) = self.cell(lat, c, src, acc, n);
+            let (h, ok) = self.cell(lat, c, src, acc, n, y);
             let k = self.cells()[n] as usize;
             for (i, v) in h.iter().enumerate() {
                 dst.write(i * lat.plane + k, *v);
@@ -299,7 +386,7 @@ impl<'a> MovingRun<'a> {
                 let k = p.cells[n] as usize;
                 // Only cell k reads these slots (its pulled populations from the covered
                 // cells), and only when it is swept.
-                bounce_links(lat, src, acc, p, *m, n, |i, v| {
+                bounce_links(lat, src, acc, p, *m, n, y, |i, v| {
                     *base.add(acc.pulled(i, k)) = v
                 });
             }
@@ -321,10 +408,20 @@ impl<'a> MovingRun<'a> {
             if rows.is_empty() || y >= lat.ny {
                 return;
             }
+            // Planes are padded to 16 values, so every plane has the same 64-byte line
+            // phase: a cell whose line (in each of the three rows) was just asked for
+            // needs no new request. Neighbouring plan cells often share lines.
+            let per_line = (64 / std::mem::size_of::<T>()).max(1) as isize;
+            let mut last = [isize::MIN; 3];
             for &k in &cells[rows[y] as usize..rows[y + 1] as usize] {
-                for i in 0..Q {
-                    for dy in [-1isize, 0, 1] {
-                        let at = (i * lat.plane + k as usize) as isize + dy * lat.stride as isize;
+                for (j, dy) in [-1isize, 0, 1].into_iter().enumerate() {
+                    let at = k as isize + dy * lat.stride as isize;
+                    if at.div_euclid(per_line) == last[j] {
+                        continue;
+                    }
+                    last[j] = at.div_euclid(per_line);
+                    for i in 0..Q {
+                        let at = (i * lat.plane) as isize + at;
                         // SAFETY: a prefetch is a hint; it does not access memory
                         // architecturally.
                         unsafe {
@@ -392,14 +489,16 @@ impl<'a> MovingRun<'a> {
         } else {
             rows[y] as usize..rows[y + 1] as usize
         };
-        let stride = lat.stride;
+        // Local x of padded k in row y, without a division.
+        let row0 = (y + 1) * lat.stride + 1;
         range.filter(move |&n| {
-            let x = cells[n] as usize % stride - 1;
+            let x = cells[n] as usize - row0;
             self.edge.contains(&Some(x)) == edge_pass
         })
     }
 
-    /// The new values of plan cell `n` and whether its density stayed positive.
+    /// The new values of plan cell `n` (in local row `y`) and whether its density stayed
+    /// positive.
     ///
     /// # Safety
     /// As [`MovingRun::row`]: the momentum slots of cell `n` belong to the caller.
@@ -411,9 +510,10 @@ impl<'a> MovingRun<'a> {
         src: Src<T>,
         acc: Access,
         n: usize,
+        y: usize,
     ) -> ([T; Q], bool) {
         match &self.kind {
-            RunKind::Links(p, m) => link_cell(lat, c, src, acc, p, *m, n),
+            RunKind::Links(p, m) => link_cell(lat, c, src, acc, p, *m, n, y),
             RunKind::Partial(p, m) => partial_cell(lat, c, src, acc, p, *m, n),
         }
     }
@@ -457,6 +557,7 @@ pub(crate) fn pull<T: Real>(lat: &Lattice<T>, src: Src<T>, acc: Access, k: usize
 ///
 /// # Safety
 /// As [`MovingRun::row`]; the link slots of cell `n` belong to the caller.
+#[allow(clippy::too_many_arguments)]
 #[inline]
 unsafe fn link_cell<T: Real, C: Collider<T>>(
     lat: &Lattice<T>,
@@ -466,19 +567,22 @@ unsafe fn link_cell<T: Real, C: Collider<T>>(
     plan: &LinkPlan,
     mom: Disjoint<f64>,
     n: usize,
+    y: usize,
 ) -> ([T; Q], bool) {
     let mut h = pull(lat, src, acc, plan.cells[n] as usize);
-    bounce_links(lat, src, acc, plan, mom, n, |i, v| h[i] = v);
+    bounce_links(lat, src, acc, plan, mom, n, y, |i, v| h[i] = v);
     let m = c.collide(&mut h);
     (h, m.rho > T::default())
 }
 
-/// The populations that enter link-plan cell `n` from the surface, one call `set(i, h_i)`
-/// per link (in the lattice's precision), each link's momentum f*_ī + h_i recorded.
+/// The populations that enter link-plan cell `n` (in local row `y`) from the surface, one
+/// call `set(i, h_i)` per link (in the lattice's precision), each link's momentum
+/// f*_ī + h_i recorded.
 /// Reads only slots of the cell's neighbours and the cell's own non-link slots.
 ///
 /// # Safety
 /// As [`MovingRun::row`]; the link slots of cell `n` belong to the caller.
+#[allow(clippy::too_many_arguments)]
 #[inline]
 unsafe fn bounce_links<T: Real>(
     lat: &Lattice<T>,
@@ -487,28 +591,30 @@ unsafe fn bounce_links<T: Real>(
     plan: &LinkPlan,
     mom: Disjoint<f64>,
     n: usize,
+    y: usize,
     mut set: impl FnMut(usize, T),
 ) {
     let k = plan.cells[n] as usize;
     let first = plan.start[n] as usize;
-    for (l, link) in plan.links[first..plan.start[n + 1] as usize]
+    for (l, &link) in plan.links[first..plan.start[n + 1] as usize]
         .iter()
         .enumerate()
     {
-        let i = link.dir as usize;
+        let i = link.dir();
         let out_i = src.get(acc.own(OPP[i], k)).to_f64();
-        let q = link.q;
+        let wall = plan.wall(lat.stride, k, y, link);
+        let q = plan.q(first + l);
         let hi = if q == 0.5 {
             // Half-way bounce-back on a moving wall (Ladd 1994, eq. 3.3).
-            out_i + link.wall
+            out_i + wall
         } else if q < 0.5 {
             // Bouzidi, Firdaouss & Lallemand 2001, eq. 5 (q < ½), moving wall.
             let ff = (k as isize + CX[i] as isize + CY[i] as isize * lat.stride as isize) as usize;
-            2.0 * q * out_i + (1.0 - 2.0 * q) * src.get(acc.own(OPP[i], ff)).to_f64() + link.wall
+            2.0 * q * out_i + (1.0 - 2.0 * q) * src.get(acc.own(OPP[i], ff)).to_f64() + wall
         } else {
             // Bouzidi et al. 2001, eq. 5 (q ≥ ½).
             let same = src.get(acc.own(i, k)).to_f64();
-            (out_i + (2.0 * q - 1.0) * same + link.wall) / (2.0 * q)
+            (out_i + (2.0 * q - 1.0) * same + wall) / (2.0 * q)
         };
         let v = T::from_f64(hi);
         set(i, v);
