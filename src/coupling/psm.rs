@@ -3,7 +3,7 @@
 //! the exact solid fraction.
 
 use super::exchange::{Coupler, Unstable};
-use super::gather::{gather, group_by_row};
+use super::gather::{gather, group_by_row, Shared};
 use super::map::{share_rows, shares_in_row, GrainView, Share};
 use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
@@ -83,16 +83,12 @@ impl Coupler {
         let sorted = &mut self.sorted;
         {
             let offsets = &self.offsets;
-            let mut rows: Vec<&mut [Share]> = Vec::with_capacity(f.ny);
-            let mut rest = sorted.as_mut_slice();
-            for y in 0..f.ny {
-                let (mine, tail) = rest.split_at_mut((offsets[y + 1] - offsets[y]) as usize);
-                rows.push(mine);
-                rest = tail;
-            }
-            rows.par_iter_mut()
-                .with_min_len(16)
-                .for_each(|r| r.sort_unstable_by_key(|sh| (sh.cell, sh.rank)));
+            let base = Shared(sorted.as_mut_ptr());
+            (0..f.ny).into_par_iter().with_min_len(16).for_each(|y| {
+                // SAFETY: rows are disjoint ranges of `sorted`, each taken by one task.
+                let r = unsafe { row_of(&base, offsets, y) };
+                r.sort_unstable_by_key(|sh| (sh.cell, sh.rank));
+            });
         }
         let shares = &*sorted;
         let offsets = &self.offsets;
@@ -122,61 +118,58 @@ impl Coupler {
         plan.shares.resize(shares.len(), SolidShare::default());
         // Then each row's cells, their weights and their shares, in parallel over rows.
         let rows = &plan.rows;
-        let mut parts = Vec::with_capacity(f.ny);
-        let (mut c_cells, mut c_start, mut c_total) = (
-            plan.cells.as_mut_slice(),
-            plan.start.as_mut_slice(),
-            plan.total.as_mut_slice(),
+        let (p_cells, p_start, p_total, p_shares) = (
+            Shared(plan.cells.as_mut_ptr()),
+            Shared(plan.start.as_mut_ptr()),
+            Shared(plan.total.as_mut_ptr()),
+            Shared(plan.shares.as_mut_ptr()),
         );
-        let mut c_shares = plan.shares.as_mut_slice();
-        for y in 0..f.ny {
-            let n = (rows[y + 1] - rows[y]) as usize;
-            let m = (offsets[y + 1] - offsets[y]) as usize;
-            let (a, ta) = std::mem::take(&mut c_cells).split_at_mut(n);
-            let (b, tb) = std::mem::take(&mut c_start).split_at_mut(n);
-            let (c, tc) = std::mem::take(&mut c_total).split_at_mut(n);
-            let (d, td) = std::mem::take(&mut c_shares).split_at_mut(m);
-            parts.push((y, a, b, c, d));
-            (c_cells, c_start, c_total, c_shares) = (ta, tb, tc, td);
-        }
-        parts
-            .into_par_iter()
-            .with_min_len(16)
-            .for_each(|(y, cells, start, total, out)| {
-                let first = offsets[y] as usize;
-                let row = &shares[first..offsets[y + 1] as usize];
-                let (mut c, mut j) = (0, 0);
-                while j < row.len() {
-                    let mut end = j + 1;
-                    while end < row.len() && row[end].cell == row[j].cell {
-                        end += 1;
-                    }
-                    let group = &row[j..end];
-                    let eps: f64 = group.iter().map(|sh| sh.fraction).sum();
-                    let e = eps.min(1.0);
-                    // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
-                    let b = e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5));
-                    let centre = f.centre_in_row(row[j].cell as usize, y);
-                    for (s, sh) in group.iter().enumerate() {
-                        let grain = &views[sh.grain as usize];
-                        out[j + s] = SolidShare {
-                            // A cell whose overlap rounds to nothing stays plain fluid.
-                            b: if eps > 0.0 {
-                                b * sh.fraction / eps
-                            } else {
-                                0.0
-                            },
-                            velocity: GrainView {
-                                centre: sh.centre,
-                                ..*grain
-                            }
-                            .surface_velocity(centre),
-                        };
-                    }
-                    (cells[c], start[c], total[c]) = (row[j].cell, (first + j) as u32, b);
-                    (c, j) = (c + 1, end);
+        (0..f.ny).into_par_iter().with_min_len(16).for_each(|y| {
+            // SAFETY: row y's cells (`rows`) and shares (`offsets`) are disjoint ranges
+            // of the plan's vectors, each taken by one task; the vectors are not
+            // otherwise touched during the pass.
+            let (cells, start, total, out) = unsafe {
+                (
+                    row_of(&p_cells, rows, y),
+                    row_of(&p_start, rows, y),
+                    row_of(&p_total, rows, y),
+                    row_of(&p_shares, offsets, y),
+                )
+            };
+            let first = offsets[y] as usize;
+            let row = &shares[first..offsets[y + 1] as usize];
+            let (mut c, mut j) = (0, 0);
+            while j < row.len() {
+                let mut end = j + 1;
+                while end < row.len() && row[end].cell == row[j].cell {
+                    end += 1;
                 }
-            });
+                let group = &row[j..end];
+                let eps: f64 = group.iter().map(|sh| sh.fraction).sum();
+                let e = eps.min(1.0);
+                // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
+                let b = e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5));
+                let centre = f.centre_in_row(row[j].cell as usize, y);
+                for (s, sh) in group.iter().enumerate() {
+                    let grain = &views[sh.grain as usize];
+                    out[j + s] = SolidShare {
+                        // A cell whose overlap rounds to nothing stays plain fluid.
+                        b: if eps > 0.0 {
+                            b * sh.fraction / eps
+                        } else {
+                            0.0
+                        },
+                        velocity: GrainView {
+                            centre: sh.centre,
+                            ..*grain
+                        }
+                        .surface_velocity(centre),
+                    };
+                }
+                (cells[c], start[c], total[c]) = (row[j].cell, (first + j) as u32, b);
+                (c, j) = (c + 1, end);
+            }
+        });
         // Plan share s is `sorted[s]`: its grain and image are read from there later.
     }
 
@@ -214,4 +207,16 @@ impl Coupler {
             (self.psm.cells[c] as usize, self.sorted[s].grain, rho)
         })
     }
+}
+
+/// Row `y` of a vector grouped by row (`offsets`: where each row starts, ny + 1 values) that
+/// `base` points into.
+///
+/// # Safety
+/// `offsets[y + 1]` is within the vector, and no one else reads or writes row y while the
+/// slice lives.
+#[allow(clippy::mut_from_ref)]
+unsafe fn row_of<'a, I>(base: &Shared<I>, offsets: &[u32], y: usize) -> &'a mut [I] {
+    let (a, b) = (offsets[y] as usize, offsets[y + 1] as usize);
+    std::slice::from_raw_parts_mut(base.get().add(a), b - a)
 }
