@@ -51,6 +51,11 @@ pub(super) struct BoundaryLists {
 }
 
 impl BoundaryLists {
+    /// Per grain view: its entries, in scan order.
+    pub fn per_grain(&self) -> &[Vec<Entry>] {
+        &self.lists
+    }
+
     /// Forget every list (the next rebuild rescans all grains).
     pub fn clear(&mut self) {
         self.ids.clear();
@@ -145,6 +150,7 @@ impl BoundaryLists {
     }
 
     /// Every grain's entries in grain order, each with the grain's index.
+    #[cfg(test)]
     pub fn entries(&self) -> impl Iterator<Item = (u32, &Entry)> {
         self.lists
             .iter()

@@ -83,12 +83,15 @@ pub struct Coupler {
     pub(super) old_cells: Vec<u32>,
     pub(super) new_cells: Vec<u32>,
     pub(super) scratch: Vec<u32>,
-    /// Interior exterior-fluid cells with at least one covered neighbour, with their links.
-    pub(super) boundary: Vec<super::boundary_lists::Entry>,
-    /// Per boundary cell: the grain it is listed with.
-    pub(super) boundary_grain: Vec<u32>,
-    /// Where each row's boundary cells start (ny + 1 values; empty with PSM).
-    pub(super) boundary_rows: Vec<u32>,
+    /// Link plan: where each row's links start (ny + 1 values; empty with PSM), and each
+    /// planned cell's upstream plain-fluid mask (interpolated bounce-back only; see
+    /// `boundary_lists::Entry`).
+    pub(super) link_rows: Vec<u32>,
+    pub(super) plain: Vec<u8>,
+    /// Scratch of the link plan's parallel build: where each thread's range of grains
+    /// starts, and each range's cell and link counts (then slots) per row.
+    pub(super) part_grains: Vec<usize>,
+    pub(super) part_counts: Vec<u32>,
     /// Each grain's boundary cells, kept between remaps (`boundary_lists.rs`).
     pub(super) lists: super::boundary_lists::BoundaryLists,
     /// Solid fractions (partially saturated method) by row, then (once planned) by cell.
@@ -112,8 +115,6 @@ pub struct Coupler {
     pub(super) rest: Vec<[f64; 2]>,
     /// PSM: where each row's shares start in `sorted` (kept from the map to the plan).
     pub(super) offsets: Vec<u32>,
-    /// Scratch: the next slot of each row while grouping the boundary cells by row.
-    pub(super) row_next: Vec<u32>,
     /// Cells changing hands in the last remap, and their refills and momenta.
     pub(super) refills: Vec<crate::lbm::moving::Refill>,
     pub(super) newly: Vec<u32>,
@@ -152,9 +153,10 @@ impl Coupler {
             old_cells: Vec::new(),
             new_cells: Vec::new(),
             scratch: Vec::new(),
-            boundary: Vec::new(),
-            boundary_grain: Vec::new(),
-            boundary_rows: Vec::new(),
+            link_rows: Vec::new(),
+            plain: Vec::new(),
+            part_grains: Vec::new(),
+            part_counts: Vec::new(),
             lists: Default::default(),
             sorted: Vec::new(),
             row_images: Vec::new(),
@@ -169,7 +171,6 @@ impl Coupler {
             share_momentum: Vec::new(),
             rest: Vec::new(),
             offsets: Vec::new(),
-            row_next: Vec::new(),
             refills: Vec::new(),
             newly: Vec::new(),
             cell_momentum: Vec::new(),

@@ -111,6 +111,18 @@ impl<I> Shared<I> {
     }
 }
 
+/// Row `y` of a vector grouped by row (`offsets`: where each row starts, ny + 1 values) that
+/// `base` points into.
+///
+/// # Safety
+/// `offsets[y + 1]` is within the vector, and no one else reads or writes row y while the
+/// slice lives.
+#[allow(clippy::mut_from_ref)]
+pub(super) unsafe fn row_of<'a, I>(base: &Shared<I>, offsets: &[u32], y: usize) -> &'a mut [I] {
+    let (a, b) = (offsets[y] as usize, offsets[y + 1] as usize);
+    std::slice::from_raw_parts_mut(base.get().add(a), b - a)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

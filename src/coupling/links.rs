@@ -1,22 +1,26 @@
 //! Bounce-back schemes: the fluid cells next to a grain (its *boundary*), the plan of their
 //! links to it, and the loads they hand to each grain.
 
-use super::boundary_lists::Entry;
 use super::exchange::{neighbour, Coupler, Unstable};
-use super::gather::gather2;
+use super::gather::{row_of, Shared};
+use super::geometry::link_fraction;
 use super::map::{nearest_image_at, GrainView};
 use super::Scheme;
-use crate::lbm::d2q9::{CX, CY, Q};
+use crate::lbm::d2q9::{CX, CY};
 use crate::lbm::moving::{MovingLink, RigidMotion};
 use crate::lbm::{Lattice, Real};
+use rayon::prelude::*;
 
 impl Coupler {
-    /// The boundary cell list from `owner` (for the grains `views` it was built from),
-    /// grouped by row: the interior fluid cells no grain covers that neighbour a covered
-    /// cell, each listed with the first grain among its neighbours' owners
-    /// (`boundary_lists::boundary_of`); within a row, grain by grain (id order), each
-    /// grain's cells in scan order. Each grain's cells are rescanned only where the last
-    /// remap could have changed them (see `boundary_lists.rs`).
+    /// The link plan's cells and links from the boundary lists of `owner` (for the grains
+    /// `views` it was built from), grouped by row: the interior fluid cells no grain covers
+    /// that neighbour a covered cell, each listed with the first grain among its
+    /// neighbours' owners (`boundary_lists::boundary_of`); within a row, grain by grain (id
+    /// order), each grain's cells in scan order; each cell's links in direction order, each
+    /// naming its grain's rigid motion (one per grain view, or per image of it in a
+    /// periodic frame). Each grain's cells are rescanned only where the last remap could
+    /// have changed them (see `boundary_lists.rs`). The map is read only for links to a
+    /// grain other than the one a cell is listed with: the lists hold the rest.
     pub(super) fn rebuild_lists<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         self.group_lists(&|k: usize| lat.is_fluid_at(k), views);
     }
@@ -28,57 +32,130 @@ impl Coupler {
         }
         let f = self.frame;
         self.lists.rebuild(&f, &self.owner, fluid, views);
-        // A stable counting sort by row: the plan then reads the list in order. Every slot
-        // of the list is written below, so only its length is set first.
-        let rows = &mut self.boundary_rows;
-        rows.clear();
-        rows.resize(f.ny + 1, 0);
-        for (_, e) in self.lists.entries() {
-            rows[e.row as usize + 1] += 1;
-        }
-        for y in 0..f.ny {
-            rows[y + 1] += rows[y];
-        }
-        let n = rows[f.ny] as usize;
-        self.boundary.resize(n, Entry::default());
-        self.boundary_grain.resize(n, 0);
-        self.row_next.clear();
-        self.row_next.extend_from_slice(&rows[..f.ny]);
-        for (g, e) in self.lists.entries() {
-            let slot = &mut self.row_next[e.row as usize];
-            self.boundary[*slot as usize] = *e;
-            self.boundary_grain[*slot as usize] = g;
-            *slot += 1;
-        }
+        self.plan_bodies(views);
+        self.scatter_plan(views);
     }
 
-    /// Plan the boundary cells' links (half-way or interpolated bounce-back), in the list's
-    /// order (grouped by row for the sweep): each link names its direction and its grain's
-    /// rigid motion (one per grain view, or per image of it in a periodic frame), from
-    /// which the sweep computes the moving-wall term. The map is read only for links to a
-    /// grain other than the one a cell is listed with: the lists hold the rest.
-    pub(super) fn plan_links(&mut self, views: &[GrainView]) {
+    /// Place the boundary lists' entries into the link plan, grouped by row (a stable
+    /// counting sort): the grains are split into one contiguous range per thread, each
+    /// range counts its cells and links per row, and each then writes its own slots, which
+    /// follow the rows' and ranges' order. The plan is the same for any thread count.
+    fn scatter_plan(&mut self, views: &[GrainView]) {
         let f = self.frame;
-        self.plan_bodies(views);
-        self.links.rows.clone_from(&self.boundary_rows);
-        self.links.x0 = f.x0 as i64;
-        let mut links = std::mem::take(&mut self.links.links);
-        let mut starts = std::mem::take(&mut self.links.start);
-        if self.scheme == Scheme::Interpolated {
-            let mut q = std::mem::take(&mut self.links.fractions);
-            self.fill_links(views, &mut starts, &mut links, &mut q, Some(|q| q));
-            self.links.fractions = q;
-        } else {
-            self.links.fractions.clear();
-            let mut none: Vec<()> = Vec::new();
-            self.fill_links(views, &mut starts, &mut links, &mut none, None);
+        let ny = f.ny;
+        let lists = self.lists.per_grain();
+        // Ranges of grains with about equal numbers of entries.
+        let total: usize = lists.iter().map(Vec::len).sum();
+        let parts = rayon::current_num_threads().clamp(1, 64);
+        let ranges = &mut self.part_grains;
+        ranges.clear();
+        ranges.push(0);
+        let mut seen = 0;
+        for (g, list) in lists.iter().enumerate() {
+            seen += list.len();
+            if seen * parts >= total * ranges.len() && ranges.len() < parts {
+                ranges.push(g + 1);
+            }
         }
-        self.links.links = links;
-        self.links.start = starts;
-        self.links.cells.clear();
-        self.links
-            .cells
-            .extend(self.boundary.iter().map(|e| e.cell));
+        while ranges.len() <= parts {
+            ranges.push(lists.len());
+        }
+        // Each range's cells and links per row (range-major, ny values each).
+        let counts = &mut self.part_counts;
+        counts.clear();
+        counts.resize(2 * parts * ny, 0);
+        let (cell_counts, link_counts) = counts.split_at_mut(parts * ny);
+        let ranges = &*ranges;
+        cell_counts
+            .par_chunks_mut(ny)
+            .zip(link_counts.par_chunks_mut(ny))
+            .enumerate()
+            .for_each(|(t, (cc, lc))| {
+                for list in &lists[ranges[t]..ranges[t + 1]] {
+                    for e in list {
+                        cc[e.row as usize] += 1;
+                        lc[e.row as usize] += e.links.count_ones();
+                    }
+                }
+            });
+        // Where each row, and each range within it, starts (the counts become starts).
+        let (rows, link_rows) = (&mut self.links.rows, &mut self.link_rows);
+        rows.clear();
+        link_rows.clear();
+        let (mut cells, mut links) = (0u32, 0u32);
+        for y in 0..ny {
+            rows.push(cells);
+            link_rows.push(links);
+            for t in 0..parts {
+                let (c, l) = (cell_counts[t * ny + y], link_counts[t * ny + y]);
+                (cell_counts[t * ny + y], link_counts[t * ny + y]) = (cells, links);
+                (cells, links) = (cells + c, links + l);
+            }
+        }
+        rows.push(cells);
+        link_rows.push(links);
+        let (n, nl) = (cells as usize, links as usize);
+        let plan = &mut self.links;
+        plan.cells.resize(n, 0);
+        plan.start.resize(n + 1, 0);
+        plan.start[n] = nl as u32;
+        plan.links.resize(nl, MovingLink::default());
+        let interpolated = self.scheme == Scheme::Interpolated;
+        self.plain.resize(if interpolated { n } else { 0 }, 0);
+        let periodic = f.periodic_x || f.periodic_y;
+        let (owner, body_start) = (&self.owner, &self.body_start);
+        let (p_cells, p_start, p_links, p_plain) = (
+            Shared(plan.cells.as_mut_ptr()),
+            Shared(plan.start.as_mut_ptr()),
+            Shared(plan.links.as_mut_ptr()),
+            Shared(self.plain.as_mut_ptr()),
+        );
+        cell_counts
+            .par_chunks_mut(ny)
+            .zip(link_counts.par_chunks_mut(ny))
+            .enumerate()
+            .for_each(|(t, (next_cell, next_link))| {
+                for (g, list) in lists.iter().enumerate().take(ranges[t + 1]).skip(ranges[t]) {
+                    for e in list {
+                        let y = e.row as usize;
+                        let slot = next_cell[y] as usize;
+                        next_cell[y] += 1;
+                        let mut l = next_link[y] as usize;
+                        let k = e.cell as usize;
+                        // SAFETY: the slots a range takes (its share of each row) are
+                        // disjoint from every other range's, and inside the vectors.
+                        unsafe {
+                            *p_cells.get().add(slot) = e.cell;
+                            *p_start.get().add(slot) = l as u32;
+                            if interpolated {
+                                *p_plain.get().add(slot) = e.plain;
+                            }
+                        }
+                        let centre = f.centre_in_row(k, y);
+                        let mut bits = e.links;
+                        while bits != 0 {
+                            // Directions in increasing order.
+                            let i = bits.trailing_zeros() as usize + 1;
+                            bits &= bits - 1;
+                            let grain = if e.foreign & (1 << (i - 1)) != 0 {
+                                owner[neighbour(&f, k, i, -1)] as usize
+                            } else {
+                                g
+                            };
+                            let image = if periodic {
+                                link_image(&f, centre, i, &views[grain]).0 as u32
+                            } else {
+                                0
+                            };
+                            let link = MovingLink::new(i, body_start[grain] + image);
+                            // SAFETY: as above, for the range's links.
+                            unsafe { *p_links.get().add(l) = link };
+                            l += 1;
+                        }
+                        next_link[y] = l as u32;
+                    }
+                }
+            });
     }
 
     /// The plan's rigid bodies for `views`: view g's motion about each image that reaches
@@ -113,58 +190,43 @@ impl Coupler {
         }
     }
 
-    /// Fill the plan's link starts and links (and, with `fraction` (interpolated
-    /// bounce-back), each link's q into `q`), one parallel pass per boundary cell.
-    fn fill_links<B: Send + Copy + Default>(
-        &self,
-        views: &[GrainView],
-        starts: &mut Vec<u32>,
-        links: &mut Vec<MovingLink>,
-        q: &mut Vec<B>,
-        fraction: Option<fn(f64) -> B>,
-    ) {
+    /// Complete the link plan that the last remap built (`rebuild_lists`, for the same
+    /// grains `views`): with interpolated bounce-back, each link's fraction q (in parallel
+    /// over rows); half-way bounce-back needs nothing more, the sweep computing each link's
+    /// moving-wall term from its body's rigid motion.
+    pub(super) fn plan_links(&mut self, views: &[GrainView]) {
         let f = self.frame;
-        let (owner, boundary) = (&self.owner, &self.boundary);
-        let (listed, body_start) = (&self.boundary_grain, &self.body_start);
-        // One pass per cell to count its links, one to write them (in parallel, in order).
-        gather2(
-            boundary.len(),
-            starts,
-            links,
-            q,
-            |b| boundary[b].links.count_ones() as usize,
-            |b, out, qs| {
-                let e = boundary[b];
-                let k = e.cell as usize;
-                let centre = f.centre_in_row(k, e.row as usize);
-                let dirs = (1..Q).filter(|&i| e.links & (1 << (i - 1)) != 0);
-                for (at, i) in dirs.enumerate() {
-                    let bit = 1u8 << (i - 1);
-                    let g = if e.foreign & bit != 0 {
-                        owner[neighbour(&f, k, i, -1)]
-                    } else {
-                        listed[b]
-                    };
-                    let grain = &views[g as usize];
-                    let (image, centre_of) = link_image(&f, centre, i, grain);
-                    out[at] = MovingLink::new(i, body_start[g as usize] + image as u32);
-                    if let Some(fraction) = fraction {
-                        let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                        let q = super::geometry::link_fraction(
-                            centre,
-                            [-cx, -cy],
-                            centre_of,
-                            grain.radius,
-                        );
-                        // Interpolation below ½ needs a plain fluid cell upstream. Both
-                        // tests are combined without a branch: which way `q < 0.5` goes
-                        // is unpredictable, and it waits on a square root.
-                        let half = (q < 0.5) & (e.plain & bit == 0);
-                        qs[at] = fraction([q, 0.5][half as usize]);
-                    }
+        debug_assert_eq!(self.body_start.len(), views.len());
+        self.links.x0 = f.x0 as i64;
+        let plan = &mut self.links;
+        if self.scheme != Scheme::Interpolated {
+            plan.fractions.clear();
+            return;
+        }
+        plan.fractions.resize(plan.links.len(), 0.5);
+        let (rows, link_rows, plain) = (&plan.rows, &self.link_rows, &self.plain);
+        let (cells, start, links, bodies) = (&plan.cells, &plan.start, &plan.links, &plan.bodies);
+        let grains = &self.body_grain;
+        let out = Shared(plan.fractions.as_mut_ptr());
+        (0..f.ny).into_par_iter().with_min_len(16).for_each(|y| {
+            // SAFETY: row y's links are a range of the fractions no other task takes.
+            let qs = unsafe { row_of(&out, link_rows, y) };
+            let first = link_rows[y] as usize;
+            for c in rows[y] as usize..rows[y + 1] as usize {
+                let centre = f.centre_in_row(cells[c] as usize, y);
+                for l in start[c] as usize..start[c + 1] as usize {
+                    let (i, b) = (links[l].dir(), links[l].body());
+                    let radius = views[grains[b] as usize].radius;
+                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                    let q = link_fraction(centre, [-cx, -cy], bodies[b].centre, radius);
+                    // Interpolation below ½ needs a plain fluid cell upstream. Both tests
+                    // are combined without a branch: which way `q < 0.5` goes is
+                    // unpredictable, and it waits on a square root.
+                    let half = (q < 0.5) & (plain[c] & (1 << (i - 1)) == 0);
+                    qs[l - first] = [q, 0.5][half as usize];
                 }
-            },
-        );
+            }
+        });
     }
 
     /// Add each link's momentum (as the sweep reported it) to its grain's column sums, in
@@ -260,13 +322,35 @@ mod tests {
                     })
                     .collect();
                 let ids: Vec<u64> = (0..views.len() as u64).collect();
-                let mut c = Coupler::new(scheme, Refill::default(), f);
-                let (mut touched, mut inner) = (Vec::new(), Vec::new());
-                cover(&f, &views, fluid, &mut c.owner, &mut touched, &mut inner);
-                c.lists.clear();
-                c.lists.follow(&ids);
-                c.group_lists(&fluid, &views);
-                c.plan_links(&views);
+                // The plan built on 1, 2 and 5 threads: the same, slot for slot.
+                let plans: Vec<Coupler> = [1, 2, 5]
+                    .into_iter()
+                    .map(|threads| {
+                        let pool = rayon::ThreadPoolBuilder::new()
+                            .num_threads(threads)
+                            .build()
+                            .unwrap();
+                        pool.install(|| {
+                            let mut c = Coupler::new(scheme, Refill::default(), f);
+                            let (mut touched, mut inner) = (Vec::new(), Vec::new());
+                            cover(&f, &views, fluid, &mut c.owner, &mut touched, &mut inner);
+                            c.lists.clear();
+                            c.lists.follow(&ids);
+                            c.group_lists(&fluid, &views);
+                            c.plan_links(&views);
+                            c
+                        })
+                    })
+                    .collect();
+                for other in &plans[1..] {
+                    let (a, b) = (&plans[0].links, &other.links);
+                    assert_eq!(a.rows, b.rows, "case {case}");
+                    assert_eq!(a.cells, b.cells, "case {case}");
+                    assert_eq!(a.start, b.start, "case {case}");
+                    assert_eq!(a.links, b.links, "case {case}");
+                    assert_eq!(a.fractions, b.fractions, "case {case}");
+                }
+                let c = &plans[1];
                 let plan = &c.links;
                 let (mut links, mut images) = (0, 0);
                 for y in 0..f.ny {

@@ -3,7 +3,7 @@
 //! the exact solid fraction.
 
 use super::exchange::{Coupler, Unstable};
-use super::gather::{gather, group_by_row, Shared};
+use super::gather::{gather, group_by_row, row_of, Shared};
 use super::map::{share_rows, shares_in_row, GrainView, Share};
 use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
@@ -207,16 +207,4 @@ impl Coupler {
             (self.psm.cells[c] as usize, self.sorted[s].grain, rho)
         })
     }
-}
-
-/// Row `y` of a vector grouped by row (`offsets`: where each row starts, ny + 1 values) that
-/// `base` points into.
-///
-/// # Safety
-/// `offsets[y + 1]` is within the vector, and no one else reads or writes row y while the
-/// slice lives.
-#[allow(clippy::mut_from_ref)]
-unsafe fn row_of<'a, I>(base: &Shared<I>, offsets: &[u32], y: usize) -> &'a mut [I] {
-    let (a, b) = (offsets[y] as usize, offsets[y + 1] as usize);
-    std::slice::from_raw_parts_mut(base.get().add(a), b - a)
 }
