@@ -287,7 +287,8 @@ impl Coupler {
 
     /// Stage "coupling", before the sweep: plan the cells at the grains' surfaces (links
     /// for the bounce-back schemes, solid shares for PSM) from the maps of the last remap,
-    /// built for the grains `views`. Then let the fluid sweep with [`Coupler::moving`] and
+    /// built for the grains `views` (the same views: the link plan took their rigid motions
+    /// then). Then let the fluid sweep with [`Coupler::moving`] and
     /// collect the loads with [`Coupler::collect`].
     pub fn plan<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let t = std::time::Instant::now();

@@ -207,10 +207,10 @@ impl<T: Real> GpuFluid<T> {
                 idx.extend_from_slice(&plan.cells);
                 idx.extend_from_slice(&plan.start);
                 idx.extend(plan.links.iter().map(|k| k.dir() as u32));
-                let (q, wall) = plan.fractions_and_walls(self.host_mut().stride);
+                let stride = self.host_mut().stride;
                 let mut real = Vec::with_capacity(3 * l);
-                real.extend(q.iter().map(|&v| T::from_f64(v)));
-                real.extend(wall.iter().map(|&v| T::from_f64(v)));
+                real.extend((0..l).map(|j| T::from_f64(plan.q(j))));
+                real.extend(plan.walls(stride).map(T::from_f64));
                 real.extend(std::iter::repeat_n(T::default(), l));
                 self.run_moving(Kernel::Links, prev, n, &idx, &real);
                 mom.clear();

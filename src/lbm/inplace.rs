@@ -263,9 +263,10 @@ impl<T: Real> Lattice<T> {
                 }
                 b |= !(m.rho > T::default());
             }
-            // Link cells are swept (and their densities checked) with the rest of the row,
-            // so they are looked at again only to name a bad one; partially saturated
-            // cells take their values computed aside.
+            // Link cells are swept with the rest of the row, whose check (pre-collision
+            // density ≤ 0 or NaN, as the two-array path checks link cells) covers them, so
+            // they are looked at again only to name a bad one; partially saturated cells
+            // take their values computed aside.
             if let Some(run) = moving.filter(|r| b || r.computes_aside()) {
                 // SAFETY: the slots of this row's cells belong to this task, and their
                 // values in `out` were computed before.

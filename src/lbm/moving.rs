@@ -132,20 +132,16 @@ impl LinkPlan {
         6.0 * W[i] * (cx * u[0] + cy * u[1])
     }
 
-    /// Every link's q and wall term, in plan order (for backends that take them as data).
-    pub fn fractions_and_walls(&self, stride: usize) -> (Vec<f64>, Vec<f64>) {
-        let n = self.links.len();
-        let (mut q, mut wall) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        for y in 0..self.rows.len().saturating_sub(1) {
-            for n in self.rows[y] as usize..self.rows[y + 1] as usize {
+    /// Every link's wall term ([`LinkPlan::wall`]), in plan order (for backends that take
+    /// them as data).
+    pub fn walls(&self, stride: usize) -> impl Iterator<Item = f64> + '_ {
+        (0..self.rows.len().saturating_sub(1)).flat_map(move |y| {
+            (self.rows[y] as usize..self.rows[y + 1] as usize).flat_map(move |n| {
                 let k = self.cells[n] as usize;
-                for l in self.start[n] as usize..self.start[n + 1] as usize {
-                    q.push(self.q(l));
-                    wall.push(self.wall(stride, k, y, self.links[l]));
-                }
-            }
-        }
-        (q, wall)
+                (self.start[n] as usize..self.start[n + 1] as usize)
+                    .map(move |l| self.wall(stride, k, y, self.links[l]))
+            })
+        })
     }
 }
 
