@@ -22,6 +22,7 @@ pub mod lanes;
 pub mod lattice;
 pub mod moving;
 mod partial_lanes;
+mod plans;
 pub mod population_bgk;
 pub mod real;
 mod whole_cells;

@@ -1,0 +1,185 @@
+//! The plans a fluid backend executes for moving solid surfaces (see [`super::moving`]):
+//! plain data in lattice units, grouped by row. Nothing here knows about grains.
+//!
+//! * [`LinkPlan`]: fluid cells next to a moving surface, each with its links to it and the
+//!   rigid motions the links' wall terms come from.
+//! * [`PsmPlan`]: partially saturated cells, each with its solid shares.
+//! * [`Refill`]: a cell a surface has just uncovered, to be rebuilt.
+
+use super::d2q9::{CX, CY, Q, W};
+
+/// One link of a fluid cell to a moving surface: population `dir` enters the cell from its
+/// solid neighbour at x − c_dir, which belongs to the rigid body `body` of the plan. Packed
+/// in four bytes (the plan is rewritten every step, so its size is its cost).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct MovingLink(u32);
+
+impl MovingLink {
+    /// The link of direction `dir` (1..=8) to body `body` (< 2²⁸).
+    #[inline]
+    pub fn new(dir: usize, body: u32) -> Self {
+        debug_assert!((1..Q).contains(&dir) && body < 1 << 28);
+        Self(body << 4 | dir as u32)
+    }
+
+    /// The incoming population (1..=8).
+    #[inline]
+    pub fn dir(self) -> usize {
+        (self.0 & 15) as usize
+    }
+
+    /// Index of the body in [`LinkPlan::bodies`].
+    #[inline]
+    pub fn body(self) -> usize {
+        (self.0 >> 4) as usize
+    }
+}
+
+/// The rigid motion of one moving surface, lattice units: the wall's velocity at a point p
+/// is u + ω × (p − c) (seed eq. 5.46).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RigidMotion {
+    /// Velocity u of the centre (cells per step).
+    pub velocity: [f64; 2],
+    /// Angular velocity ω (radians per step, counter-clockwise).
+    pub omega: f64,
+    /// Centre c (global lattice coordinates: cell (x, y) spans [x, x+1) × [y, y+1)).
+    pub centre: [f64; 2],
+}
+
+/// Fluid cells next to moving surfaces with their links, compressed by cell: the links of
+/// `cells[c]` are `links[start[c]..start[c + 1]]`. Cells are padded indices of interior
+/// plain-fluid cells, each at most once, grouped by row: row y's are
+/// `cells[rows[y]..rows[y + 1]]` (any order within a row).
+///
+/// The moving-wall term of each link is computed by the executing sweep from its body's
+/// rigid motion at the link's midpoint ([`LinkPlan::wall`]), so the plan holds four bytes
+/// per link (twelve with interpolation).
+#[derive(Debug, Clone, Default)]
+pub struct LinkPlan {
+    /// Offsets of each row's cells (ny + 1 values; empty for an empty plan).
+    pub rows: Vec<u32>,
+    /// Padded cell indices.
+    pub cells: Vec<u32>,
+    /// Offsets into `links`, one more than `cells`.
+    pub start: Vec<u32>,
+    /// The links, cell by cell.
+    pub links: Vec<MovingLink>,
+    /// Where each link meets the surface, as a fraction q of the link from the cell centre,
+    /// one per link; empty when every link is half-way (q = ½). Below ½ the post-collision
+    /// value of the fluid neighbour at x + c_dir is interpolated, so the planner must give
+    /// ½ where that neighbour is not plain fluid outside every surface.
+    pub fractions: Vec<f64>,
+    /// The rigid motions the links refer to.
+    pub bodies: Vec<RigidMotion>,
+    /// Global x of local column 0 (a cell's centre is (x0 + x + ½, y + ½)).
+    pub x0: i64,
+}
+
+impl LinkPlan {
+    /// Empty the plan, keeping its allocations.
+    pub fn clear(&mut self) {
+        self.rows.clear();
+        self.cells.clear();
+        self.start.clear();
+        self.start.push(0);
+        self.links.clear();
+        self.fractions.clear();
+        self.bodies.clear();
+    }
+
+    /// The fraction q of link `l` (see [`LinkPlan::fractions`]).
+    #[inline]
+    pub fn q(&self, l: usize) -> f64 {
+        if self.fractions.is_empty() {
+            0.5
+        } else {
+            self.fractions[l]
+        }
+    }
+
+    /// Ladd's moving-wall term 2 w_i ρ_w (c_i·u_w)/c_s², ρ_w = 1, of `link` from the cell at
+    /// padded index `k` in local row `y` of a lattice with row stride `stride` (Ladd 1994,
+    /// eq. 3.3; seed eq. 5.45): u_w is the body's velocity at the link's midpoint.
+    #[inline]
+    pub fn wall(&self, stride: usize, k: usize, y: usize, link: MovingLink) -> f64 {
+        let i = link.dir();
+        let b = &self.bodies[link.body()];
+        let x = k as i64 - ((y + 1) * stride) as i64 - 1;
+        let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+        let mid = [
+            (x + self.x0) as f64 + 0.5 - 0.5 * cx,
+            y as f64 + 0.5 - 0.5 * cy,
+        ];
+        let r = [mid[0] - b.centre[0], mid[1] - b.centre[1]];
+        // Seed eq. 5.46: u_w = u + ω × r.
+        let u = [
+            b.velocity[0] - b.omega * r[1],
+            b.velocity[1] + b.omega * r[0],
+        ];
+        6.0 * W[i] * (cx * u[0] + cy * u[1])
+    }
+
+    /// Every link's wall term ([`LinkPlan::wall`]), in plan order (for backends that take
+    /// them as data).
+    pub fn walls(&self, stride: usize) -> impl Iterator<Item = f64> + '_ {
+        (0..self.rows.len().saturating_sub(1)).flat_map(move |y| {
+            (self.rows[y] as usize..self.rows[y + 1] as usize).flat_map(move |n| {
+                let k = self.cells[n] as usize;
+                (self.start[n] as usize..self.start[n + 1] as usize)
+                    .map(move |l| self.wall(stride, k, y, self.links[l]))
+            })
+        })
+    }
+}
+
+/// One solid's share of a partially saturated cell.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SolidShare {
+    /// Its weight B_s in the collision (the cell's B split by solid fraction).
+    pub b: f64,
+    /// Velocity of the solid at the cell centre (lattice units).
+    pub velocity: [f64; 2],
+}
+
+/// Partially saturated cells with their solid shares, compressed and grouped by row like
+/// [`LinkPlan`].
+#[derive(Debug, Clone, Default)]
+pub struct PsmPlan {
+    /// Offsets of each row's cells (ny + 1 values; empty for an empty plan).
+    pub rows: Vec<u32>,
+    /// Padded cell indices (interior plain fluid, each at most once).
+    pub cells: Vec<u32>,
+    /// Offsets into `shares`, one more than `cells`.
+    pub start: Vec<u32>,
+    /// Total weight B of each cell (Noble & Torczynski 1998, eq. 9).
+    pub total: Vec<f64>,
+    /// The shares, cell by cell.
+    pub shares: Vec<SolidShare>,
+}
+
+impl PsmPlan {
+    /// Empty the plan, keeping its allocations.
+    pub fn clear(&mut self) {
+        self.rows.clear();
+        self.cells.clear();
+        self.start.clear();
+        self.start.push(0);
+        self.total.clear();
+        self.shares.clear();
+    }
+}
+
+/// A cell that a moving surface has just uncovered, to be rebuilt.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Refill {
+    /// Padded cell index.
+    pub cell: u32,
+    /// Bit i set: the neighbour at x + c_i is fluid to average the density from.
+    pub neighbours: u16,
+    /// Direction of the neighbour whose non-equilibrium part is copied (Caiazzo 2005), or 0
+    /// for the equilibrium alone.
+    pub extrapolate: u8,
+    /// Velocity of the surface at the cell (lattice units).
+    pub velocity: [f64; 2],
+}
