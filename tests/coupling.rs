@@ -256,16 +256,19 @@ fn bad_coupled_scenes_name_the_key() {
 
 #[test]
 fn coupled_run_that_blows_up_stops_with_the_step() {
-    // A grain thrown at Mach ≈ 0.9 in lattice units.
-    let dir = tempfile::tempdir().unwrap();
-    let text = momentum_box("bounce-back")
-        .replace("velocity_m_s = [0.01, 0.004]", "velocity_m_s = [1.5, 0.0]")
-        .replace("steps = 10000", "steps = 2000");
-    let (s, _o) = run_text(&text, dir.path(), None);
-    assert_eq!(s.status, Status::Unstable);
-    let e = s.error.unwrap();
-    eprintln!("{e}");
-    assert!(e.contains("unstable at step"), "{e}");
+    // A grain thrown at Mach ≈ 0.9 in lattice units, with either kind of surface cell.
+    for scheme in ["bounce-back", "psm"] {
+        let dir = tempfile::tempdir().unwrap();
+        let text = momentum_box(scheme)
+            .replace("velocity_m_s = [0.01, 0.004]", "velocity_m_s = [1.5, 0.0]")
+            .replace("steps = 10000", "steps = 2000");
+        let (s, _o) = run_text(&text, dir.path(), None);
+        assert_eq!(s.status, Status::Unstable, "{scheme}");
+        let e = s.error.unwrap();
+        eprintln!("{scheme}: {e}");
+        assert!(e.contains("unstable at step"), "{e}");
+        assert!(e.contains("grain 0"), "{e}");
+    }
 }
 
 /// Draft, kiss and tumble (`jobs/dkt/dkt.toml`, Glowinski et al. 2001's setup, PSM): the

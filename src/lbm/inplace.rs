@@ -16,9 +16,9 @@
 
 use super::aligned::AlignedBuf;
 use super::boundary::{Access, Src};
+use super::bulk_aa::{bulk_kernels, sweep_run};
 use super::collision::{with_collider, Collider};
 use super::d2q9::{CX, CY, MIRROR_X, MIRROR_Y, OPP, Q};
-use super::lanes::{has_avx512, prefetch_ahead, Lanes};
 use super::lattice::{Face, FaceCondition, Lattice, Layout, StepError, FLUID, HALO_DIRS};
 use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
@@ -86,11 +86,11 @@ impl<T: Real> Lattice<T> {
         self.layout = Layout::Local;
     }
 
-    /// One in-place step (see the module docs), recomputing the cells of moving surfaces in
-    /// `moving` (see [`super::moving`]): they are computed from the step's start state before
-    /// the sweep overwrites it, and stored over the sweep's values by the task that sweeps
-    /// their row. Returns the plan index and density of the first such cell that went bad.
-    /// Collective when the slab has neighbours.
+    /// One in-place step (see the module docs) with the cells of moving surfaces in
+    /// `moving` (see [`super::moving`]): link cells are prepared from the step's start state
+    /// just before the sweep reaches them, partially saturated cells are computed by the
+    /// sweep itself. Returns the plan index and density of the first such cell that went
+    /// bad. Collective when the slab has neighbours.
     pub(crate) fn stream_collide_in_place(
         &mut self,
         comm: &dyn Comm,
@@ -112,19 +112,6 @@ impl<T: Real> Lattice<T> {
             exchanged(&self.faces[1]).then_some(self.nx - 1),
         ];
         let run = MovingRun::new(moving, edge);
-        let mut out = std::mem::take(&mut self.moving_out);
-        if let Some(r) = &run {
-            // Only partially saturated cells are computed aside (every one is written before
-            // it is read, so the buffer is not cleared); link cells need none.
-            out.resize(
-                if r.computes_aside() {
-                    Q * r.cells().len()
-                } else {
-                    0
-                },
-                T::default(),
-            );
-        }
         let peers = self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some();
         // Open corners read their diagonal neighbour's values of the step's start, which the
         // sweep overwrites in place: taken first (the two-array kernel reads them untouched).
@@ -137,7 +124,7 @@ impl<T: Real> Lattice<T> {
             let mut halo = std::mem::take(&mut self.halo);
             let waited = halo.exchange(comm, &mut || {
                 if run.is_none() {
-                    self.sweep_in_place(true, None, &mut out)
+                    self.sweep_in_place(true, None)
                 }
             });
             self.halo = halo;
@@ -146,20 +133,19 @@ impl<T: Real> Lattice<T> {
                 self.unpack_halo();
             }
             if let Some(r) = &run {
-                self.precompute_edge(r, &mut out);
-                self.sweep_in_place(true, Some(r), &mut out);
+                self.precompute_edge(r);
+                self.sweep_in_place(true, Some(r));
             }
             if peers {
-                self.sweep_in_place(false, run.as_ref(), &mut out);
+                self.sweep_in_place(false, run.as_ref());
             }
         } else {
             if let Some(r) = &run {
-                self.precompute_edge(r, &mut out);
+                self.precompute_edge(r);
             }
-            self.sweep_in_place(true, run.as_ref(), &mut out);
-            self.sweep_in_place(false, run.as_ref(), &mut out);
+            self.sweep_in_place(true, run.as_ref());
+            self.sweep_in_place(false, run.as_ref());
         }
-        self.moving_out = out;
         self.corner_drho = None;
         self.layout = if push { Layout::Pushed } else { Layout::Local };
         // A moving-surface cell that went bad is the coupling's to report (it names the
@@ -190,58 +176,63 @@ impl<T: Real> Lattice<T> {
         }))
     }
 
-    /// Compute the moving-surface cells of `run` on the exchanged edge columns into `out`
-    /// before the sweep (the others are computed by the sweep, just ahead of it).
-    fn precompute_edge(&mut self, run: &MovingRun<'_>, out: &mut [T]) {
-        if !self.exchanged_faces().contains(&true) {
+    /// Prepare the link cells of `run` on the exchanged edge columns before the sweep (the
+    /// others are prepared by the sweep, just ahead of it).
+    fn precompute_edge(&mut self, run: &MovingRun<'_>) {
+        if !run.precomputes() || !self.exchanged_faces().contains(&true) {
             return;
         }
         let (base, acc) = (Shared(self.buf[0].as_mut_ptr()), self.access());
-        let out = Shared(out.as_mut_ptr());
         let this = &*self;
-        with_collider!(this.collision, this.smagorinsky, this.params, |c| {
-            (0..this.ny).into_par_iter().with_min_len(64).for_each(|y| {
-                // SAFETY: no cell has been swept yet; each row's plan cells have their own
-                // slots and values in `out` (sized by the caller).
-                unsafe { run.precompute_row(this, c, base.ptr(), acc, out.ptr(), y, true) }
-            });
+        (0..this.ny).into_par_iter().with_min_len(64).for_each(|y| {
+            // SAFETY: no cell has been swept yet.
+            unsafe { run.precompute_row(this, base.ptr(), acc, y, true) }
         });
     }
 
     /// One parallel pass over the rows: bulk and special cells (`inner`), or the cells next
-    /// to exchanged faces; then the row's moving-surface cells of `moving` take their
-    /// values in `out` (computed ahead of the sweep in the inner pass).
-    fn sweep_in_place(&mut self, inner: bool, moving: Option<&MovingRun<'_>>, out: &mut [T]) {
+    /// to exchanged faces, with the moving-surface cells of `moving`: link cells prepared
+    /// ahead of the sweep (in the inner pass), partially saturated cells computed by it.
+    fn sweep_in_place(&mut self, inner: bool, moving: Option<&MovingRun<'_>>) {
         with_collider!(self.collision, self.smagorinsky, self.params, |c| self
-            .sweep_aa(c, inner, moving, out));
+            .sweep_aa(c, inner, moving));
     }
 
-    fn sweep_aa<C: Collider<T>>(
-        &mut self,
-        c: &C,
-        inner: bool,
-        moving: Option<&MovingRun<'_>>,
-        out: &mut [T],
-    ) {
+    fn sweep_aa<C: Collider<T>>(&mut self, c: &C, inner: bool, moving: Option<&MovingRun<'_>>) {
         let acc = self.access();
         let base = Shared(self.buf[0].as_mut_ptr());
-        let outp = Shared(out.as_mut_ptr());
+        let partial = moving.and_then(|r| r.partial_sweep());
         let ns = self.forces.solids();
         let mut slot_values = std::mem::take(&mut self.forces.values);
         let slots = Shared(slot_values.as_mut_ptr());
         let mut row_bad = std::mem::take(&mut self.row_bad);
         let this = &*self;
-        let bulk = bulk_kernel::<T, C>();
+        let kernels = bulk_kernels::<T, C>();
         let sweep_row = |y: usize, bad: &mut u8| {
             let row = &this.plan[y];
             let mut b = false;
             let yp = y + 1;
+            // This row's partially saturated cells (increasing padded index).
+            let psm = partial.as_ref().map(|p| (p, p.row(y)));
             let (cells, first_slot) = if inner {
+                let mut next = psm.as_ref().map_or(0, |(_, r)| r.start);
                 for &(x0, x1) in &row.bulk {
                     let k0 = yp * this.stride + x0 as usize + 1;
+                    let n = (x1 - x0) as usize;
+                    // The plan cells inside this run (the others are special cells).
+                    let run_cells = psm.as_ref().map(|(p, r)| {
+                        while next < r.end && p.cell(next) < k0 {
+                            next += 1;
+                        }
+                        let first = next;
+                        while next < r.end && p.cell(next) < k0 + n {
+                            next += 1;
+                        }
+                        (*p, first..next)
+                    });
                     // SAFETY: the run's cells are this task's; each reads and writes only
-                    // its own nine slots.
-                    b |= unsafe { bulk(c, base.ptr(), acc, k0, (x1 - x0) as usize) };
+                    // its own nine slots; so are the plan cells' momentum slots.
+                    b |= unsafe { sweep_run(c, kernels, base.ptr(), acc, k0, n, run_cells) };
                 }
                 (&row.special, this.forces.row_start[y])
             } else {
@@ -255,8 +246,14 @@ impl<T: Real> Lattice<T> {
                 f.fill([0.0; 2]);
                 let src = Src(base.ptr() as *const T);
                 let mut h = this.gather_special(src, acc, x as usize, y, Some(f));
+                let pre = h;
                 let m = c.collide(&mut h);
                 let k = yp * this.stride + x as usize + 1;
+                if let Some(n) = psm.as_ref().and_then(|(p, r)| p.find(r.clone(), k)) {
+                    let p = psm.as_ref().expect("found in it").0;
+                    // SAFETY: the cell's shares are swept by this task only.
+                    unsafe { p.blend(n, &pre, &mut h, &m) };
+                }
                 for (i, hi) in h.iter().enumerate() {
                     // SAFETY: the cell's own slots (see the module docs).
                     unsafe { *base.ptr().add(acc.store(i, k)) = *hi };
@@ -265,12 +262,10 @@ impl<T: Real> Lattice<T> {
             }
             // Link cells are swept with the rest of the row, whose check (pre-collision
             // density ≤ 0 or NaN, as the two-array path checks link cells) covers them, so
-            // they are looked at again only to name a bad one; partially saturated cells
-            // take their values computed aside.
-            if let Some(run) = moving.filter(|r| b || r.computes_aside()) {
-                // SAFETY: the slots of this row's cells belong to this task, and their
-                // values in `out` were computed before.
-                unsafe { run.finish_row(this, outp.ptr(), base.ptr(), acc, y, !inner) };
+            // they are looked at again only to name a bad one.
+            if let Some(run) = moving.filter(|_| b) {
+                // SAFETY: the slots of this row's cells belong to this task.
+                unsafe { run.check_row(this, base.ptr(), acc, y, !inner) };
             }
             if inner {
                 *bad = b as u8;
@@ -278,7 +273,7 @@ impl<T: Real> Lattice<T> {
                 *bad |= b as u8;
             }
         };
-        match moving.filter(|_| inner) {
+        match moving.filter(|r| inner && r.precomputes()) {
             None => row_bad
                 .par_iter_mut()
                 .enumerate()
@@ -291,9 +286,8 @@ impl<T: Real> Lattice<T> {
                 // data then in cache); the bands' first and last rows are computed first.
                 // SAFETY (both closures): rows y − 1..=y + 1 are not yet swept when row y
                 // is computed, and each row's values in `out` are written by one task.
-                let compute = |y: usize| unsafe {
-                    run.precompute_row(this, c, base.ptr(), acc, outp.ptr(), y, false)
-                };
+                let compute =
+                    |y: usize| unsafe { run.precompute_row(this, base.ptr(), acc, y, false) };
                 let ny = this.ny;
                 let band = (ny / (4 * rayon::current_num_threads())).clamp(8, 64);
                 (0..ny.div_ceil(band)).into_par_iter().for_each(|b| {
@@ -460,84 +454,4 @@ impl<T: Real> Lattice<T> {
             _ => NONE,
         }
     }
-}
-
-/// A bulk row kernel: `(collider, buffer, access, first cell, cells)`, as [`bulk_run_aa`].
-type BulkFn<T, C> = unsafe fn(&C, *mut T, Access, usize, usize) -> bool;
-
-/// The bulk row kernel for this CPU: compiled for AVX-512 (32 vector registers, so the
-/// collision's temporaries stay in registers) where the CPU has it, else for the build's
-/// target (AVX2 + FMA). Both run the same operations in the same order, so they give the
-/// same bits.
-fn bulk_kernel<T: Real, C: Collider<T>>() -> BulkFn<T, C> {
-    #[cfg(target_arch = "x86_64")]
-    if has_avx512() {
-        return bulk_run_aa_avx512::<T, C>;
-    }
-    bulk_run_aa::<T, C, 8>
-}
-
-/// [`bulk_run_aa`] compiled with AVX-512.
-///
-/// # Safety
-/// As [`bulk_run_aa`]; the CPU has AVX-512F and AVX-512VL.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl")]
-unsafe fn bulk_run_aa_avx512<T: Real, C: Collider<T>>(
-    c: &C,
-    base: *mut T,
-    acc: Access,
-    k0: usize,
-    n: usize,
-) -> bool {
-    bulk_run_aa::<T, C, 8>(c, base, acc, k0, n)
-}
-
-/// The bulk cells `[k0, k0 + n)` of one row, in place, `LANES` at a time (scalar for the
-/// remainder). Returns true if any cell's density went NaN or non-positive.
-///
-/// # Safety
-/// `base` is the lattice's one buffer; no other task touches these cells' slots.
-#[inline(always)]
-unsafe fn bulk_run_aa<T: Real, C: Collider<T>, const LANES: usize>(
-    c: &C,
-    base: *mut T,
-    acc: Access,
-    k0: usize,
-    n: usize,
-) -> bool {
-    let ld: [*const T; Q] = std::array::from_fn(|i| base.add(acc.pulled(i, k0)) as *const T);
-    // In place, cell k stores direction j where it pulled direction opp(j) (both layouts):
-    // nine addresses, not eighteen, so the pointers stay in registers.
-    debug_assert!((0..Q).all(|j| acc.store(j, k0) == acc.pulled(OPP[j], k0)));
-    let st: [*mut T; Q] = std::array::from_fn(|j| ld[OPP[j]] as *mut T);
-    let zero = T::default();
-    let mut bad = false;
-    let mut k = 0;
-    while k + LANES <= n {
-        prefetch_ahead(&ld, k);
-        let mut h: [Lanes<T, LANES>; Q] = std::array::from_fn(|i| {
-            let mut v = [zero; LANES];
-            std::ptr::copy_nonoverlapping(ld[i].add(k), v.as_mut_ptr(), LANES);
-            Lanes(v)
-        });
-        let m = c.collide(&mut h);
-        for j in 0..Q {
-            std::ptr::copy_nonoverlapping(h[j].0.as_ptr(), st[j].add(k), LANES);
-        }
-        for r in m.rho.0 {
-            bad |= !(r > zero);
-        }
-        k += LANES;
-    }
-    while k < n {
-        let mut h: [T; Q] = std::array::from_fn(|i| *ld[i].add(k));
-        let m = c.collide(&mut h);
-        for j in 0..Q {
-            *st[j].add(k) = h[j];
-        }
-        bad |= !(m.rho > zero);
-        k += 1;
-    }
-    bad
 }

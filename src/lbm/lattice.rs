@@ -202,8 +202,6 @@ pub struct Lattice<T: Real> {
     /// start (W–S, E–S, E–N, W–N), read before the sweep overwrites its slots. None otherwise
     /// (the two-array kernel reads the untouched source buffer).
     pub(crate) corner_drho: Option<[T; 4]>,
-    /// In place, with moving surfaces: their cells' new values, computed before the sweep.
-    pub(crate) moving_out: Vec<T>,
     /// In place: the last push step ran with moving surfaces, whose refills the next step
     /// must drain again.
     pub(crate) redrain: bool,
@@ -346,7 +344,6 @@ impl<T: Real> Lattice<T> {
             layout: Layout::TwoArray,
             drain_plan: None,
             corner_drho: None,
-            moving_out: Vec::new(),
             redrain: false,
             full_halo: [Vec::new(), Vec::new()],
         }

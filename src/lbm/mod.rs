@@ -10,6 +10,7 @@
 pub mod aligned;
 pub mod backend;
 pub mod boundary;
+mod bulk_aa;
 pub mod collision;
 pub mod d2q9;
 mod external;
@@ -21,7 +22,7 @@ pub mod kernel;
 pub mod lanes;
 pub mod lattice;
 pub mod moving;
-mod partial_lanes;
+mod partial;
 mod plans;
 pub mod population_bgk;
 pub mod real;

@@ -1,5 +1,5 @@
 //! Moving solid surfaces that live outside the fluid core (grains, see `coupling/`), as
-//! plain cell lists the core executes after a sweep. Nothing here knows about grains: a
+//! plain cell lists the core executes with a sweep. Nothing here knows about grains: a
 //! plan names cells, links, rigid motions and solid fractions in lattice units, and the
 //! backend (this file for the CPU, `gpu/` for a device) recomputes those cells and reports
 //! the momentum each link or solid share received, in plan order.
@@ -16,7 +16,7 @@ use super::boundary::{Access, Src};
 use super::collision::{equilibrium, Collider, Moments};
 use super::d2q9::{CX, CY, OPP, Q};
 use super::lattice::{is_plain, Lattice, Layout};
-use super::partial_lanes::{partial_cells, LANES};
+use super::partial::{partial_cell, PartialSweep};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -62,8 +62,9 @@ pub fn momentum_of(h: &[f64; Q]) -> [f64; 2] {
     j
 }
 
-/// Cells of moving surfaces that a sweep recomputes right after it has swept their row (the
-/// data is still in cache), with where the momenta go.
+/// Cells of moving surfaces that a sweep computes with their row (in place: link cells
+/// prepared just ahead of it, partially saturated cells inside it) or right after it (two
+/// arrays: the data is still in cache), with where the momenta go.
 pub enum MovingCells<'a> {
     /// Nothing to recompute.
     None,
@@ -147,62 +148,24 @@ impl<'a> MovingRun<'a> {
         }
     }
 
-    /// In place, before the sweep overwrites the values they read: prepare the plan's
-    /// cells of row `y` (on the exchanged edge columns when `edge_pass`, the others
-    /// otherwise) from the step's start state in `base`, read through `acc`. A link cell gets
-    /// its bounced-back populations in the slots it pulls them from (where the sweep then
-    /// collides them with the rest of its row); a partially saturated cell is computed
-    /// whole into `out` (Q values per plan cell, in plan order), for
-    /// [`MovingRun::finish_row`]. The same values as [`MovingRun::row`] from two arrays.
+    /// In place, before the sweep overwrites the values they read: give the link cells of
+    /// row `y` (on the exchanged edge columns when `edge_pass`, the others otherwise) their
+    /// bounced-back populations (from the step's start state in `base`, read through `acc`)
+    /// in the slots they pull them from, where the sweep then collides them with the rest of
+    /// their row: the same values as [`MovingRun::row`] from two arrays. Partially saturated
+    /// cells need nothing here: the sweep computes them ([`PartialSweep`]).
     ///
     /// # Safety
-    /// Nothing has yet written the slots of rows y − 1 to y + 1 in this step; `out` holds Q
-    /// values per plan cell of a partially saturated plan, and those of row `y`'s cells
-    /// belong to the calling task.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) unsafe fn precompute_row<T: Real, C: Collider<T>>(
+    /// Nothing has yet written the slots of rows y − 1 to y + 1 in this step.
+    pub(crate) unsafe fn precompute_row<T: Real>(
         &self,
         lat: &Lattice<T>,
-        c: &C,
         base: *mut T,
         acc: Access,
-        out: *mut T,
         y: usize,
         edge_pass: bool,
     ) {
         let src = Src(base as *const T);
-        if let RunKind::Partial(p, m) = &self.kind {
-            // Single-share cells eight at a time, the others one by one.
-            let mut batch = [0usize; LANES];
-            let mut filled = 0;
-            let store = |n: usize, h: &[T; Q], ok: bool| {
-                std::ptr::copy_nonoverlapping(h.as_ptr(), out.add(n * Q), Q);
-                if !ok {
-                    self.bad.fetch_min(n, Ordering::Relaxed);
-                }
-            };
-            for n in self.row_cells(lat, y, edge_pass) {
-                if p.start[n + 1] - p.start[n] != 1 {
-                    let (h, ok) = partial_cell(lat, c, src, acc, p, *m, n);
-                    store(n, &h, ok);
-                    continue;
-                }
-                batch[filled] = n;
-                filled += 1;
-                if filled == LANES {
-                    let (hs, oks) = partial_cells(lat, c, src, acc, p, *m, &batch);
-                    for l in 0..LANES {
-                        store(batch[l], &hs[l], oks[l]);
-                    }
-                    filled = 0;
-                }
-            }
-            for &n in &batch[..filled] {
-                let (h, ok) = partial_cell(lat, c, src, acc, p, *m, n);
-                store(n, &h, ok);
-            }
-            return;
-        }
         if let RunKind::Links(p, m) = &self.kind {
             for n in self.row_cells(lat, y, edge_pass) {
                 let k = p.cells[n] as usize;
@@ -225,7 +188,7 @@ impl<'a> MovingRun<'a> {
         {
             let (rows, cells) = match &self.kind {
                 RunKind::Links(p, _) => (&p.rows, &p.cells),
-                RunKind::Partial(p, _) => (&p.rows, &p.cells),
+                RunKind::Partial(..) => return,
             };
             if rows.is_empty() || y >= lat.ny {
                 return;
@@ -257,38 +220,32 @@ impl<'a> MovingRun<'a> {
         }
     }
 
-    /// In place, in the task that has just swept row `y`, for the row's plan cells (edge
-    /// columns or not, as `edge_pass`): a partially saturated cell takes its values in
-    /// `out` (from [`MovingRun::precompute_row`]) where the sweep stored its own
-    /// (`acc.store`); a link cell's density is checked.
+    /// In place, in the task that has just swept row `y` and found it bad: check the
+    /// density of the row's link cells (edge columns or not, as `edge_pass`), to name the
+    /// first bad one and its surface.
     ///
     /// # Safety
     /// `base` is the lattice's one buffer; the slots of row `y`'s cells belong to the
-    /// calling task; `out` holds the row's precomputed values.
-    pub(crate) unsafe fn finish_row<T: Real>(
+    /// calling task.
+    pub(crate) unsafe fn check_row<T: Real>(
         &self,
         lat: &Lattice<T>,
-        out: *const T,
-        base: *mut T,
+        base: *const T,
         acc: Access,
         y: usize,
         edge_pass: bool,
     ) {
-        let links = matches!(self.kind, RunKind::Links(..));
+        if !self.precomputes() {
+            return;
+        }
         for n in self.row_cells(lat, y, edge_pass) {
             let k = self.cells()[n] as usize;
-            if links {
-                let rho = 1.0
-                    + (0..Q)
-                        .map(|j| (*base.add(acc.store(j, k))).to_f64())
-                        .sum::<f64>();
-                if !(rho > 0.0) {
-                    self.bad.fetch_min(n, Ordering::Relaxed);
-                }
-                continue;
-            }
-            for j in 0..Q {
-                *base.add(acc.store(j, k)) = *out.add(n * Q + j);
+            let rho = 1.0
+                + (0..Q)
+                    .map(|j| (*base.add(acc.store(j, k))).to_f64())
+                    .sum::<f64>();
+            if !(rho > 0.0) {
+                self.bad.fetch_min(n, Ordering::Relaxed);
             }
         }
     }
@@ -340,10 +297,19 @@ impl<'a> MovingRun<'a> {
         }
     }
 
-    /// Whether the plan's cells are computed whole beside an in-place sweep (partially
-    /// saturated cells) rather than inside it (link cells).
-    pub(crate) fn computes_aside(&self) -> bool {
-        matches!(self.kind, RunKind::Partial(..))
+    /// Whether an in-place sweep prepares the plan's cells ahead of it (link cells, see
+    /// [`MovingRun::precompute_row`]) rather than computing them itself (partially
+    /// saturated cells, see [`MovingRun::partial_sweep`]).
+    pub(crate) fn precomputes(&self) -> bool {
+        matches!(self.kind, RunKind::Links(..))
+    }
+
+    /// The partially saturated cells, for a sweep that computes them itself.
+    pub(crate) fn partial_sweep(&self) -> Option<PartialSweep<'_>> {
+        match &self.kind {
+            RunKind::Partial(plan, mom) => Some(PartialSweep::new(plan, *mom, &self.bad)),
+            RunKind::Links(..) => None,
+        }
     }
 
     /// Plan index of the first cell that went bad, if any.
@@ -442,60 +408,6 @@ unsafe fn bounce_links<T: Real>(
         set(i, v);
         mom.write(first + l, out_i + v.to_f64());
     }
-}
-
-/// The new values of partially saturated plan cell `n` and whether its density stayed
-/// positive.
-///
-/// # Safety
-/// As [`MovingRun::row`]; the share slots of cell `n` belong to the caller.
-#[inline]
-pub(crate) unsafe fn partial_cell<T: Real, C: Collider<T>>(
-    lat: &Lattice<T>,
-    c: &C,
-    src: Src<T>,
-    acc: Access,
-    plan: &PsmPlan,
-    mom: Disjoint<[f64; 2]>,
-    n: usize,
-) -> ([T; Q], bool) {
-    let h = pull(lat, src, acc, plan.cells[n] as usize);
-    let hf: [f64; Q] = h.map(|v| v.to_f64());
-    let b_total = plan.total[n];
-    let mut post = h;
-    let m = c.collide(&mut post);
-    let m64 = Moments {
-        drho: m.drho.to_f64(),
-        rho: m.rho.to_f64(),
-        ux: m.ux.to_f64(),
-        uy: m.uy.to_f64(),
-    };
-    let eq_fluid = equilibrium(&m64);
-    let mut new: [f64; Q] = std::array::from_fn(|i| (1.0 - b_total) * post[i].to_f64());
-    let first = plan.start[n] as usize;
-    for (s, share) in plan.shares[first..plan.start[n + 1] as usize]
-        .iter()
-        .enumerate()
-    {
-        let eq_solid = equilibrium(&Moments {
-            ux: share.velocity[0],
-            uy: share.velocity[1],
-            ..m64
-        });
-        let mut p = [0.0; 2];
-        for i in 0..Q {
-            let j = OPP[i];
-            // Noble & Torczynski 1998, eq. 8:
-            // Ω^s_i = [f_ī − f^eq_ī(ρ, u)] − [f_i − f^eq_i(ρ, u_s)].
-            let omega_s = (hf[j] - eq_fluid[j]) - (hf[i] - eq_solid[i]);
-            new[i] += share.b * (hf[i] + omega_s);
-            p[0] += share.b * omega_s * CX[i] as f64;
-            p[1] += share.b * omega_s * CY[i] as f64;
-        }
-        mom.write(first + s, [-p[0], -p[1]]);
-    }
-    let rho = 1.0 + new.iter().sum::<f64>();
-    (new.map(T::from_f64), rho > 0.0)
 }
 
 /// The padded cells a refill reads: its listed neighbours and the extrapolation source.
