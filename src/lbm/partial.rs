@@ -6,6 +6,7 @@
 use super::boundary::{Access, Src};
 use super::collision::{equilibrium, Collider, Moments};
 use super::d2q9::{CX, CY, OPP, Q};
+use super::lanes::{Lanes, Simd};
 use super::lattice::Lattice;
 use super::moving::{pull, Disjoint};
 use super::plans::PsmPlan;
@@ -36,7 +37,8 @@ pub(crate) unsafe fn partial_cell<T: Real, C: Collider<T>>(
 /// The new values of partially saturated plan cell `n` from its pre-collision populations
 /// `h`, their fluid collision `post` and the pre-collision moments `m`, and whether its
 /// density stayed positive (Noble & Torczynski 1998, eqs. 8–9; seed eqs. 5.53–5.54):
-/// f_i ← (1 − B) post_i + Σ_s B_s (h_i + Ω^s_i). Each share's momentum goes to `mom`.
+/// f_i ← (1 − B) post_i + Σ_s B_s (h_i + Ω^s_i), in the lattice's precision like the
+/// collision itself. Each share's momentum goes to `mom`.
 ///
 /// # Safety
 /// The momentum slots of cell `n`'s shares belong to the caller.
@@ -49,40 +51,68 @@ pub(crate) unsafe fn blend_partial<T: Real>(
     post: &[T; Q],
     m: &Moments<T>,
 ) -> ([T; Q], bool) {
-    let hf: [f64; Q] = h.map(|v| v.to_f64());
-    let b_total = plan.total[n];
-    let m64 = Moments {
-        drho: m.drho.to_f64(),
-        rho: m.rho.to_f64(),
-        ux: m.ux.to_f64(),
-        uy: m.uy.to_f64(),
-    };
-    let eq_fluid = equilibrium(&m64);
-    let mut new: [f64; Q] = std::array::from_fn(|i| (1.0 - b_total) * post[i].to_f64());
+    let eq_fluid = equilibrium(m);
+    let mut new = fluid_part(post, T::from_f64(plan.total[n]));
     let first = plan.start[n] as usize;
     for (s, share) in plan.shares[first..plan.start[n + 1] as usize]
         .iter()
         .enumerate()
     {
-        let eq_solid = equilibrium(&Moments {
-            ux: share.velocity[0],
-            uy: share.velocity[1],
-            ..m64
-        });
-        let mut p = [0.0; 2];
-        for i in 0..Q {
-            let j = OPP[i];
-            // Noble & Torczynski 1998, eq. 8:
-            // Ω^s_i = [f_ī − f^eq_ī(ρ, u)] − [f_i − f^eq_i(ρ, u_s)].
-            let omega_s = (hf[j] - eq_fluid[j]) - (hf[i] - eq_solid[i]);
-            new[i] += share.b * (hf[i] + omega_s);
-            p[0] += share.b * omega_s * CX[i] as f64;
-            p[1] += share.b * omega_s * CY[i] as f64;
-        }
-        mom.write(first + s, [-p[0], -p[1]]);
+        let u = share.velocity.map(T::from_f64);
+        let p = add_share(&mut new, h, &eq_fluid, m, T::from_f64(share.b), u);
+        mom.write(first + s, [-p[0].to_f64(), -p[1].to_f64()]);
     }
-    let rho = 1.0 + new.iter().sum::<f64>();
-    (new.map(T::from_f64), rho > 0.0)
+    let ok = density_ok(&new);
+    (new, ok)
+}
+
+/// (1 − B) post_i: the fluid's part of a partially saturated cell whose solid weights add
+/// up to `b_total` (Noble & Torczynski 1998, eq. 9).
+#[inline(always)]
+pub(crate) fn fluid_part<V: Simd>(post: &[V; Q], b_total: V) -> [V; Q] {
+    let one = V::splat(V::Scalar::from_f64(1.0));
+    std::array::from_fn(|i| (one - b_total) * post[i])
+}
+
+/// Add one solid's part B_s (h_i + Ω^s_i) to `new`, for a solid of weight `b` moving at `u`
+/// (Noble & Torczynski 1998, eqs. 8–9), given the cell's pre-collision populations `h`,
+/// moments `m` and fluid equilibrium `eq_fluid`. Returns the momentum the solid gives the
+/// fluid, Σ_i B_s Ω^s_i c_i.
+#[inline(always)]
+pub(crate) fn add_share<V: Simd>(
+    new: &mut [V; Q],
+    h: &[V; Q],
+    eq_fluid: &[V; Q],
+    m: &Moments<V>,
+    b: V,
+    u: [V; 2],
+) -> [V; 2] {
+    let eq_solid = equilibrium(&Moments {
+        ux: u[0],
+        uy: u[1],
+        ..*m
+    });
+    let s = |v: i32| V::splat(V::Scalar::from_f64(v as f64));
+    let zero = V::splat(V::Scalar::default());
+    let mut p = [zero; 2];
+    for i in 0..Q {
+        let j = OPP[i];
+        // Noble & Torczynski 1998, eq. 8:
+        // Ω^s_i = [f_ī − f^eq_ī(ρ, u)] − [f_i − f^eq_i(ρ, u_s)].
+        let omega_s = (h[j] - eq_fluid[j]) - (h[i] - eq_solid[i]);
+        new[i] = new[i] + b * (h[i] + omega_s);
+        p[0] = p[0] + b * omega_s * s(CX[i]);
+        p[1] = p[1] + b * omega_s * s(CY[i]);
+    }
+    p
+}
+
+/// Whether the density of the shifted populations `new`, 1 + Σ_i new_i (summed in direction
+/// order), is positive (false for NaN).
+#[inline(always)]
+pub(crate) fn density_ok<T: Real>(new: &[T; Q]) -> bool {
+    let sum = new.iter().fold(T::from_f64(-0.0), |a, &v| a + v);
+    T::from_f64(1.0) + sum > T::default()
 }
 
 /// Partially saturated cells that an in-place sweep computes itself, from the values it has
@@ -126,6 +156,77 @@ impl<'a> PartialSweep<'a> {
             .binary_search(&(k as u32))
             .ok()
             .map(|j| range.start + j)
+    }
+
+    /// Replace, in the lanes of `post` (the fluid collision of `h`, moments `m`, for the
+    /// `L` cells from padded index `k`), those of the plan cells `cells` (which lie among
+    /// them) by the cells' new values, recording the first bad one. Cells of one share are
+    /// blended in lanes, with the operations of [`blend_partial`] in the same order (the
+    /// same bits); a chunk that holds a cell of several shares goes lane by lane.
+    ///
+    /// # Safety
+    /// The momentum slots of the cells' shares belong to the caller.
+    #[inline(always)]
+    pub(crate) unsafe fn blend_lanes<T: Real, const L: usize>(
+        &self,
+        cells: std::ops::Range<usize>,
+        k: usize,
+        h: &[Lanes<T, L>; Q],
+        post: &mut [Lanes<T, L>; Q],
+        m: &Moments<Lanes<T, L>>,
+    ) {
+        let plan = self.plan;
+        let lane = |n: usize| plan.cells[n] as usize - k;
+        if cells
+            .clone()
+            .any(|n| plan.start[n + 1] - plan.start[n] != 1)
+        {
+            for n in cells {
+                let l = lane(n);
+                let pick = |v: &[Lanes<T, L>; Q]| -> [T; Q] { std::array::from_fn(|i| v[i].0[l]) };
+                let mut one = pick(post);
+                let ml = Moments {
+                    drho: m.drho.0[l],
+                    rho: m.rho.0[l],
+                    ux: m.ux.0[l],
+                    uy: m.uy.0[l],
+                };
+                self.blend(n, &pick(h), &mut one, &ml);
+                for (i, v) in one.into_iter().enumerate() {
+                    post[i].0[l] = v;
+                }
+            }
+            return;
+        }
+        // The lanes that hold no plan cell get weight 0 and are not written back.
+        let zero = T::default();
+        let (mut b_total, mut b, mut ux, mut uy) = ([zero; L], [zero; L], [zero; L], [zero; L]);
+        for n in cells.clone() {
+            let (l, share) = (lane(n), plan.shares[plan.start[n] as usize]);
+            b_total[l] = T::from_f64(plan.total[n]);
+            b[l] = T::from_f64(share.b);
+            ux[l] = T::from_f64(share.velocity[0]);
+            uy[l] = T::from_f64(share.velocity[1]);
+        }
+        let eq_fluid = equilibrium(m);
+        let mut new = fluid_part(post, Lanes(b_total));
+        let p = add_share(&mut new, h, &eq_fluid, m, Lanes(b), [Lanes(ux), Lanes(uy)]);
+        let mut sum = Lanes([T::from_f64(-0.0); L]);
+        for v in &new {
+            sum = sum + *v;
+        }
+        for n in cells {
+            let l = lane(n);
+            for i in 0..Q {
+                post[i].0[l] = new[i].0[l];
+            }
+            let at = plan.start[n] as usize;
+            self.mom
+                .write(at, [-p[0].0[l].to_f64(), -p[1].0[l].to_f64()]);
+            if !(T::from_f64(1.0) + sum.0[l] > zero) {
+                self.bad.fetch_min(n, Ordering::Relaxed);
+            }
+        }
     }
 
     /// Replace `post`, plan cell `n`'s fluid collision of `h` (moments `m`), by the
