@@ -108,6 +108,8 @@ pub struct Coupler {
     /// The grain (view) of each of the link plan's bodies, and each view's first body.
     pub(super) body_grain: Vec<u32>,
     pub(super) body_start: Vec<u32>,
+    /// Per body of the link plan: its window of the column sums (scratch of the collect).
+    pub(super) body_windows: Vec<super::sums::Window>,
     pub(super) psm: PsmPlan,
     /// Momentum per link or share of the last exchange, and scratch lists.
     pub(super) link_momentum: Vec<f64>,
@@ -165,6 +167,7 @@ impl Coupler {
             mark: vec![false; cells],
             links: LinkPlan::default(),
             body_grain: Vec::new(),
+            body_windows: Vec::new(),
             body_start: Vec::new(),
             psm: PsmPlan::default(),
             link_momentum: Vec::new(),

@@ -241,9 +241,23 @@ impl Coupler {
         bad: Option<(usize, f64)>,
     ) -> Option<Unstable> {
         let f = self.frame;
-        let (plan, grains, momentum) = (&self.links, &self.body_grain, &self.link_momentum);
+        // Each body's window of column sums (its grain's, seen from its image).
+        let mut windows = std::mem::take(&mut self.body_windows);
+        windows.clear();
+        windows.extend(
+            self.links
+                .bodies
+                .iter()
+                .zip(&self.body_grain)
+                .map(|(b, &g)| {
+                    let g = g as usize;
+                    self.sums.window(g, views[g].centre[0], b.centre[0])
+                }),
+        );
+        let (plan, momentum) = (&self.links, &self.link_momentum);
         let rows = &plan.rows;
         let columns = f.x0..f.x0 + f.nx;
+        let win = &windows;
         self.sums
             .fill_by_columns(columns.start, columns.end, |band, sums| {
                 for y in 0..rows.len().saturating_sub(1) {
@@ -257,17 +271,18 @@ impl Coupler {
                         for l in plan.start[c] as usize..plan.start[c + 1] as usize {
                             let (link, m) = (plan.links[l], momentum[l]);
                             let (i, b) = (link.dir(), link.body());
-                            let (g, image) = (grains[b] as usize, plan.bodies[b].centre);
+                            let image = plan.bodies[b].centre;
                             let (cx, cy) = (CX[i] as f64, CY[i] as f64);
                             let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
                             let arm = [mid[0] - image[0], mid[1] - image[1]];
                             let (px, py) = (-m * cx, -m * cy);
                             let load = [px, py, arm[0] * py - arm[1] * px];
-                            sums.add(g, views[g].centre[0], image[0], col, load);
+                            sums.add_to(&win[b], col, load);
                         }
                     }
                 }
             });
+        self.body_windows = windows;
         bad.map(|(c, rho)| {
             let l = self.links.start[c] as usize;
             let body = self.links.links[l].body();

@@ -82,6 +82,22 @@ impl ColumnSums {
         self.first[g] + slot as usize
     }
 
+    /// Grain `g`'s window of slots as seen from its image at `image_x` (the grain's own
+    /// centre at `grain_x`, or that shifted by a lattice width): for [`Adder::add_to`], which
+    /// then needs neither the grain nor the shift per load.
+    pub fn window(&self, g: usize, grain_x: f64, image_x: f64) -> Window {
+        let shift = if grain_x == image_x {
+            0
+        } else {
+            ((grain_x - image_x) / self.global_nx as f64).round() as i64 * self.global_nx
+        };
+        Window {
+            offset: self.first[g] as i64 + shift - self.base[g],
+            first: self.first[g],
+            end: self.first[g + 1],
+        }
+    }
+
     /// Fill the sums in parallel, one task per band of the global columns `lo..hi`:
     /// `fill(band, adder)` adds (with [`Adder::add`]) the loads of the band's columns, in
     /// the order one serial fill would add them. Bands hold different columns, hence
@@ -121,6 +137,15 @@ impl ColumnSums {
     }
 }
 
+/// One grain image's slots (see [`ColumnSums::window`]): column c's slot is `offset + c`,
+/// which must lie in `first..end`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Window {
+    offset: i64,
+    first: usize,
+    end: usize,
+}
+
 /// Adds loads to the columns of one band of a [`ColumnSums::fill_by_columns`].
 pub struct Adder<'a> {
     sums: &'a ColumnSums,
@@ -134,7 +159,27 @@ impl Adder<'_> {
     pub fn add(&self, g: usize, grain_x: f64, image_x: f64, column: usize, load: Load) {
         assert!(self.band.contains(&column), "column outside the band");
         let at = self.sums.slot(g, grain_x, image_x, column);
-        // SAFETY: `at` is in bounds, in grain g's window (`slot` checks it); only
+        self.put(at, load);
+    }
+
+    /// As [`Adder::add`], for the grain image whose slots are `w` (from
+    /// [`ColumnSums::window`]): the same slot.
+    #[inline]
+    pub fn add_to(&self, w: &Window, column: usize, load: Load) {
+        assert!(self.band.contains(&column), "column outside the band");
+        let at = w.offset + column as i64;
+        assert!(
+            at >= w.first as i64 && (at as usize) < w.end,
+            "column outside the grain's window"
+        );
+        self.put(at as usize, load);
+    }
+
+    /// Add `load` to slot `at`, which lies in a grain's window (checked by the caller), of a
+    /// column of this band.
+    #[inline(always)]
+    fn put(&self, at: usize, load: Load) {
+        // SAFETY: `at` is in bounds, in a grain's window (checked by the caller); only
         // this band's task adds to columns of the band, and their slots are no other
         // column's (see `slot`); nothing else reads the sums during the fill.
         unsafe {
