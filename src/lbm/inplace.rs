@@ -118,13 +118,15 @@ impl<T: Real> Lattice<T> {
         self.corner_drho = Some(self.corner_drhos(self.access()));
         if push {
             // The neighbours' results into the halos, as the two-array kernel's, while the
-            // cells that do not read them are swept. With moving surfaces the sweep waits:
-            // their cells next to the faces read both the halo and slots the sweep rewrites.
+            // cells that do not read them are swept (partially saturated cells among them:
+            // they read only their own slots). With link cells the sweep waits: those next
+            // to the faces read both the halo and slots the sweep rewrites.
             self.pack_halo();
+            let waits = run.as_ref().is_some_and(|r| r.precomputes());
             let mut halo = std::mem::take(&mut self.halo);
             let waited = halo.exchange(comm, &mut || {
-                if run.is_none() {
-                    self.sweep_in_place(true, None)
+                if !waits {
+                    self.sweep_in_place(true, run.as_ref())
                 }
             });
             self.halo = halo;
@@ -132,7 +134,7 @@ impl<T: Real> Lattice<T> {
             if peers {
                 self.unpack_halo();
             }
-            if let Some(r) = &run {
+            if let Some(r) = run.as_ref().filter(|_| waits) {
                 self.precompute_edge(r);
                 self.sweep_in_place(true, Some(r));
             }
