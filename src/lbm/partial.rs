@@ -177,10 +177,23 @@ impl<'a> PartialSweep<'a> {
     ) {
         let plan = self.plan;
         let lane = |n: usize| plan.cells[n] as usize - k;
-        if cells
-            .clone()
-            .any(|n| plan.start[n + 1] - plan.start[n] != 1)
-        {
+        // The lanes that hold no plan cell get weight 0 and are not written back.
+        let zero = T::default();
+        let (mut b_total, mut b, mut ux, mut uy) = ([zero; L], [zero; L], [zero; L], [zero; L]);
+        let mut single = true;
+        for n in cells.clone() {
+            let at = plan.start[n] as usize;
+            if plan.start[n + 1] as usize != at + 1 {
+                single = false;
+                break;
+            }
+            let (l, share) = (lane(n), plan.shares[at]);
+            b_total[l] = T::from_f64(plan.total[n]);
+            b[l] = T::from_f64(share.b);
+            ux[l] = T::from_f64(share.velocity[0]);
+            uy[l] = T::from_f64(share.velocity[1]);
+        }
+        if !single {
             for n in cells {
                 let l = lane(n);
                 let pick = |v: &[Lanes<T, L>; Q]| -> [T; Q] { std::array::from_fn(|i| v[i].0[l]) };
@@ -197,16 +210,6 @@ impl<'a> PartialSweep<'a> {
                 }
             }
             return;
-        }
-        // The lanes that hold no plan cell get weight 0 and are not written back.
-        let zero = T::default();
-        let (mut b_total, mut b, mut ux, mut uy) = ([zero; L], [zero; L], [zero; L], [zero; L]);
-        for n in cells.clone() {
-            let (l, share) = (lane(n), plan.shares[plan.start[n] as usize]);
-            b_total[l] = T::from_f64(plan.total[n]);
-            b[l] = T::from_f64(share.b);
-            ux[l] = T::from_f64(share.velocity[0]);
-            uy[l] = T::from_f64(share.velocity[1]);
         }
         let eq_fluid = equilibrium(m);
         let mut new = fluid_part(post, Lanes(b_total));
