@@ -282,12 +282,12 @@ impl<T: Real> Lattice<T> {
                 .with_min_len(if inner { 4 } else { 64 })
                 .for_each(|(y, bad)| sweep_row(y, bad)),
             Some(run) => {
-                // A moving-surface cell reads slots of the rows next to it that the sweep
-                // rewrites, so it is computed before them: each task sweeps a band of rows
-                // in order and computes row y + 1's cells just before sweeping row y (the
-                // data then in cache); the bands' first and last rows are computed first.
+                // A link cell's preparation reads slots of the rows next to it that the
+                // sweep rewrites, so it is done before them: each task sweeps a band of rows
+                // in order and prepares row y + 1's cells just before sweeping row y (the
+                // data then in cache); the bands' first and last rows are prepared first.
                 // SAFETY (both closures): rows y − 1..=y + 1 are not yet swept when row y
-                // is computed, and each row's values in `out` are written by one task.
+                // is prepared, and each row's link cells are prepared by one task.
                 let compute =
                     |y: usize| unsafe { run.precompute_row(this, base.ptr(), acc, y, false) };
                 let ny = this.ny;

@@ -1,8 +1,9 @@
 //! Moving solid surfaces that live outside the fluid core (grains, see `coupling/`), as
 //! plain cell lists the core executes with a sweep. Nothing here knows about grains: a
 //! plan names cells, links, rigid motions and solid fractions in lattice units, and the
-//! backend (this file for the CPU, `gpu/` for a device) recomputes those cells and reports
-//! the momentum each link or solid share received, in plan order.
+//! backend (this file, `partial.rs` and `bulk_aa.rs` for the CPU, `gpu/` for a device)
+//! recomputes those cells and reports the momentum each link or solid share received, in
+//! plan order.
 //!
 //! * [`LinkPlan`]: fluid cells next to a moving surface, each with the links that come from
 //!   it: half-way (Ladd 1994) or interpolated (Bouzidi, Firdaouss & Lallemand 2001)

@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// positive.
 ///
 /// # Safety
-/// As [`MovingRun::row`]; the share slots of cell `n` belong to the caller.
+/// As `MovingRun::row`: the share slots of cell `n` belong to the caller.
 #[inline]
 pub(crate) unsafe fn partial_cell<T: Real, C: Collider<T>>(
     lat: &Lattice<T>,

@@ -148,7 +148,8 @@ pub struct SolidShare {
 pub struct PsmPlan {
     /// Offsets of each row's cells (ny + 1 values; empty for an empty plan).
     pub rows: Vec<u32>,
-    /// Padded cell indices (interior plain fluid, each at most once).
+    /// Padded cell indices (interior fluid cells, each at most once), increasing within
+    /// each row (the in-place sweep walks them beside its runs, and checks this).
     pub cells: Vec<u32>,
     /// Offsets into `shares`, one more than `cells`.
     pub start: Vec<u32>,
