@@ -83,11 +83,8 @@ pub struct Coupler {
     pub(super) old_cells: Vec<u32>,
     pub(super) new_cells: Vec<u32>,
     pub(super) scratch: Vec<u32>,
-    /// Link plan: where each row's links start (ny + 1 values; empty with PSM), and each
-    /// planned cell's upstream plain-fluid mask (interpolated bounce-back only; see
-    /// `boundary_lists::Entry`).
+    /// Link plan: where each row's links start (ny + 1 values; empty with PSM).
     pub(super) link_rows: Vec<u32>,
-    pub(super) plain: Vec<u8>,
     /// Scratch of the link plan's parallel build: where each thread's range of grains
     /// starts, and each range's cell and link counts (then slots) per row.
     pub(super) part_grains: Vec<usize>,
@@ -156,7 +153,6 @@ impl Coupler {
             new_cells: Vec::new(),
             scratch: Vec::new(),
             link_rows: Vec::new(),
-            plain: Vec::new(),
             part_grains: Vec::new(),
             part_counts: Vec::new(),
             lists: Default::default(),

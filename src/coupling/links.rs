@@ -2,7 +2,7 @@
 //! links to it, and the loads they hand to each grain.
 
 use super::exchange::{neighbour, Coupler, Unstable};
-use super::gather::{row_of, Shared};
+use super::gather::Shared;
 use super::geometry::link_fraction;
 use super::map::{nearest_image_at, GrainView};
 use super::Scheme;
@@ -101,15 +101,17 @@ impl Coupler {
         plan.start[n] = nl as u32;
         plan.links.resize(nl, MovingLink::default());
         let interpolated = self.scheme == Scheme::Interpolated;
-        self.plain.resize(if interpolated { n } else { 0 }, 0);
+        plan.fractions
+            .resize(if interpolated { nl } else { 0 }, 0.5);
         let periodic = f.periodic_x || f.periodic_y;
         let (owner, body_start) = (&self.owner, &self.body_start);
-        let (p_cells, p_start, p_links, p_plain) = (
+        let (p_cells, p_start, p_links, p_fractions) = (
             Shared(plan.cells.as_mut_ptr()),
             Shared(plan.start.as_mut_ptr()),
             Shared(plan.links.as_mut_ptr()),
-            Shared(self.plain.as_mut_ptr()),
+            Shared(plan.fractions.as_mut_ptr()),
         );
+        let bodies = &plan.bodies;
         cell_counts
             .par_chunks_mut(ny)
             .zip(link_counts.par_chunks_mut(ny))
@@ -127,9 +129,6 @@ impl Coupler {
                         unsafe {
                             *p_cells.get().add(slot) = e.cell;
                             *p_start.get().add(slot) = l as u32;
-                            if interpolated {
-                                *p_plain.get().add(slot) = e.plain;
-                            }
                         }
                         let centre = f.centre_in_row(k, y);
                         let mut bits = e.links;
@@ -147,9 +146,23 @@ impl Coupler {
                             } else {
                                 0
                             };
-                            let link = MovingLink::new(i, body_start[grain] + image);
+                            let body = body_start[grain] + image;
+                            let link = MovingLink::new(i, body);
                             // SAFETY: as above, for the range's links.
                             unsafe { *p_links.get().add(l) = link };
+                            if interpolated {
+                                let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                                let (at, radius) =
+                                    (bodies[body as usize].centre, views[grain].radius);
+                                let q = link_fraction(centre, [-cx, -cy], at, radius);
+                                // Interpolation below ½ needs a plain fluid cell upstream.
+                                // Both tests are combined without a branch: which way
+                                // `q < 0.5` goes is unpredictable, and it waits on a square
+                                // root.
+                                let half = (q < 0.5) & (e.plain & (1 << (i - 1)) == 0);
+                                // SAFETY: as above, for the range's links.
+                                unsafe { *p_fractions.get().add(l) = [q, 0.5][half as usize] };
+                            }
                             l += 1;
                         }
                         next_link[y] = l as u32;
@@ -191,44 +204,13 @@ impl Coupler {
     }
 
     /// Complete the link plan that the last remap built (`rebuild_lists`, which took the
-    /// grains' rigid motions from the same `views`; only their radii are read here): with
-    /// interpolated bounce-back, each link's fraction q (in parallel over rows); half-way
-    /// bounce-back needs nothing more, the sweep computing each link's moving-wall term
-    /// from its body's rigid motion.
+    /// grains' rigid motions and, with interpolated bounce-back, each link's fraction q from
+    /// the same `views`): only the slab's offset is set here. Half-way bounce-back needs
+    /// nothing more, the sweep computing each link's moving-wall term from its body's rigid
+    /// motion.
     pub(super) fn plan_links(&mut self, views: &[GrainView]) {
-        let f = self.frame;
         debug_assert_eq!(self.body_start.len(), views.len());
-        self.links.x0 = f.x0 as i64;
-        let plan = &mut self.links;
-        // Nothing to add with half-way links, or before the first remap built a plan.
-        if self.scheme != Scheme::Interpolated || self.link_rows.len() != f.ny + 1 {
-            plan.fractions.clear();
-            return;
-        }
-        plan.fractions.resize(plan.links.len(), 0.5);
-        let (rows, link_rows, plain) = (&plan.rows, &self.link_rows, &self.plain);
-        let (cells, start, links, bodies) = (&plan.cells, &plan.start, &plan.links, &plan.bodies);
-        let grains = &self.body_grain;
-        let out = Shared(plan.fractions.as_mut_ptr());
-        (0..f.ny).into_par_iter().with_min_len(16).for_each(|y| {
-            // SAFETY: row y's links are a range of the fractions no other task takes.
-            let qs = unsafe { row_of(&out, link_rows, y) };
-            let first = link_rows[y] as usize;
-            for c in rows[y] as usize..rows[y + 1] as usize {
-                let centre = f.centre_in_row(cells[c] as usize, y);
-                for l in start[c] as usize..start[c + 1] as usize {
-                    let (i, b) = (links[l].dir(), links[l].body());
-                    let radius = views[grains[b] as usize].radius;
-                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                    let q = link_fraction(centre, [-cx, -cy], bodies[b].centre, radius);
-                    // Interpolation below ½ needs a plain fluid cell upstream. Both tests
-                    // are combined without a branch: which way `q < 0.5` goes is
-                    // unpredictable, and it waits on a square root.
-                    let half = (q < 0.5) & (plain[c] & (1 << (i - 1)) == 0);
-                    qs[l - first] = [q, 0.5][half as usize];
-                }
-            }
-        });
+        self.links.x0 = self.frame.x0 as i64;
     }
 
     /// Add each link's momentum (as the sweep reported it) to its grain's column sums, in
