@@ -83,8 +83,6 @@ pub struct Coupler {
     pub(super) old_cells: Vec<u32>,
     pub(super) new_cells: Vec<u32>,
     pub(super) scratch: Vec<u32>,
-    /// Link plan: where each row's links start (ny + 1 values; empty with PSM).
-    pub(super) link_rows: Vec<u32>,
     /// Scratch of the link plan's parallel build: where each thread's range of grains
     /// starts, and each range's cell and link counts (then slots) per row.
     pub(super) part_grains: Vec<usize>,
@@ -152,7 +150,6 @@ impl Coupler {
             old_cells: Vec::new(),
             new_cells: Vec::new(),
             scratch: Vec::new(),
-            link_rows: Vec::new(),
             part_grains: Vec::new(),
             part_counts: Vec::new(),
             lists: Default::default(),

@@ -79,13 +79,11 @@ impl Coupler {
                 }
             });
         // Where each row, and each range within it, starts (the counts become starts).
-        let (rows, link_rows) = (&mut self.links.rows, &mut self.link_rows);
+        let rows = &mut self.links.rows;
         rows.clear();
-        link_rows.clear();
         let (mut cells, mut links) = (0u32, 0u32);
         for y in 0..ny {
             rows.push(cells);
-            link_rows.push(links);
             for t in 0..parts {
                 let (c, l) = (cell_counts[t * ny + y], link_counts[t * ny + y]);
                 (cell_counts[t * ny + y], link_counts[t * ny + y]) = (cells, links);
@@ -93,7 +91,6 @@ impl Coupler {
             }
         }
         rows.push(cells);
-        link_rows.push(links);
         let (n, nl) = (cells as usize, links as usize);
         let plan = &mut self.links;
         plan.cells.resize(n, 0);
