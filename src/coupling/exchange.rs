@@ -91,9 +91,17 @@ pub struct Coupler {
     pub(super) lists: super::boundary_lists::BoundaryLists,
     /// Solid fractions (partially saturated method) by row, then (once planned) by cell.
     pub(super) sorted: Vec<Share>,
-    /// Each grain image's rows (grain, image centre, row), and their order by row with
-    /// where each row starts.
-    pub(super) row_images: Vec<(u32, [f64; 2], u32)>,
+    /// The grain images that reach the slab (grain, image centre), with the line tables of
+    /// their exact cell areas (`geometry::CellAreas`: image i's vertical lines are
+    /// `column_lines[column_start[i]..column_start[i + 1]]`, its horizontal lines likewise).
+    pub(super) disk_images: Vec<(u32, [f64; 2])>,
+    pub(super) column_start: Vec<u32>,
+    pub(super) column_lines: Vec<super::geometry::ColumnLine>,
+    pub(super) row_start: Vec<u32>,
+    pub(super) row_lines: Vec<super::geometry::RowLine>,
+    /// Each grain image's rows (index into `disk_images`, row), and their order by row
+    /// with where each row starts.
+    pub(super) row_images: Vec<(u32, u32)>,
     pub(super) image_order: Vec<u32>,
     pub(super) image_rows: Vec<u32>,
     /// Scratch marks per padded cell (all false between uses; bounce-back schemes).
@@ -154,6 +162,11 @@ impl Coupler {
             part_counts: Vec::new(),
             lists: Default::default(),
             sorted: Vec::new(),
+            disk_images: Vec::new(),
+            column_start: Vec::new(),
+            column_lines: Vec::new(),
+            row_start: Vec::new(),
+            row_lines: Vec::new(),
             row_images: Vec::new(),
             image_order: Vec::new(),
             image_rows: Vec::new(),

@@ -106,6 +106,103 @@ pub fn cell_fraction(centre: [f64; 2], radius: f64, x: i64, y: i64) -> f64 {
     disk_rectangle_area(centre, radius, [xf, yf], [xf + 1.0, yf + 1.0]).clamp(0.0, 1.0)
 }
 
+/// The grid lines bounding the cells a disk at coordinate `c` with radius `r` can overlap
+/// along one axis (cells ⌊c − r⌋ ..= ⌊c + r⌋, the same range the share maps visit): the
+/// first line and the number of lines (one more than cells).
+#[inline]
+pub fn box_lines(c: f64, r: f64) -> (i64, usize) {
+    let (lo, hi) = ((c - r).floor() as i64, (c + r).floor() as i64);
+    (lo, (hi - lo + 2) as usize)
+}
+
+/// A vertical grid line's entry in a disk's [`CellAreas`]: [s, G(s)], with s the line's
+/// offset from the centre clamped to [−r, r] and G(s) = ∫_{−r}^{s} √(r² − t²) dt, the
+/// area of the upper half-disk left of the line.
+pub type ColumnLine = [f64; 2];
+
+/// A horizontal grid line's entry in a disk's [`CellAreas`]: [v, a, G(a)], with v the
+/// line's offset from the centre, a = √(max(r² − v², 0)) the half-width of the chord it
+/// cuts, and G as in [`ColumnLine`].
+pub type RowLine = [f64; 3];
+
+/// The column entry of the vertical line at `x` for the disk (`centre`, `radius`).
+#[inline]
+pub fn column_line(centre: [f64; 2], radius: f64, x: f64) -> ColumnLine {
+    let s = (x - centre[0]).clamp(-radius, radius);
+    [s, upper_area_left_of(s, radius)]
+}
+
+/// The row entry of the horizontal line at `y` for the disk (`centre`, `radius`).
+#[inline]
+pub fn row_line(centre: [f64; 2], radius: f64, y: f64) -> RowLine {
+    let v = y - centre[1];
+    let a = (radius * radius - v * v).max(0.0).sqrt();
+    [v, a, upper_area_left_of(a, radius)]
+}
+
+/// G(s) = ∫_{−r}^{s} √(r² − t²) dt for |s| ≤ r: the area of the upper half-disk left of s.
+#[inline]
+fn upper_area_left_of(s: f64, r: f64) -> f64 {
+    half_chord_integral(s, r) + std::f64::consts::FRAC_PI_4 * r * r
+}
+
+/// Area of the disk (radius r, centred at the origin) left of the vertical line `col` and
+/// below the horizontal line `row`; `half` = πr²/2. With h(t) = √(r² − t²), the region's
+/// height at abscissa t is h + min(v, h) for v ≥ 0 and max(0, v + h) for v < 0; min(v, h)
+/// = v exactly where |t| < a, so the integral over t < s takes G at s and ±a only
+/// (G(−a) = πr²/2 − G(a)).
+#[inline]
+fn corner_area(col: ColumnLine, row: RowLine, half: f64) -> f64 {
+    let ([s, gs], [v, a, ga]) = (col, row);
+    if s <= -a {
+        // Left of the chord: whole columns of the disk below v ≥ 0, nothing below v < 0.
+        return if v >= 0.0 { 2.0 * gs } else { 0.0 };
+    }
+    let strip = v * (s.min(a) + a);
+    if v >= 0.0 {
+        // ∫ h + [∫_{−r}^{−a} h + v (min(s, a) + a) + ∫_a^{max(s, a)} h].
+        gs + (half - ga) + strip + if s > a { gs - ga } else { 0.0 }
+    } else {
+        // ∫_{−a}^{min(s, a)} (v + h).
+        strip + gs.min(ga) - (half - ga)
+    }
+}
+
+/// The exact areas a disk shares with the cells of its box, from one entry per grid line
+/// ([`column_line`], [`row_line`]): each cell's area is a difference of four corner areas
+/// (inclusion–exclusion), so the square roots and arcsines are computed once per line
+/// instead of per cell. `columns[j]` is the line at x = `x_lo` + j, `rows[m]` the line at
+/// y = `y_lo` + m, both covering the disk's box ([`box_lines`]).
+#[derive(Debug, Clone, Copy)]
+pub struct CellAreas<'a> {
+    /// One entry per vertical line, from `x_lo`.
+    pub columns: &'a [ColumnLine],
+    /// One entry per horizontal line, from `y_lo`.
+    pub rows: &'a [RowLine],
+    /// First vertical line (global lattice x).
+    pub x_lo: i64,
+    /// First horizontal line (lattice y).
+    pub y_lo: i64,
+    /// The disk's radius (lattice units).
+    pub radius: f64,
+}
+
+impl CellAreas<'_> {
+    /// Area the disk shares with cell (x, y) (inside the box) as a fraction of the cell, in
+    /// [0, 1]: [`cell_fraction`] to rounding (within about 1e-15 of πr²).
+    #[inline]
+    pub fn fraction(&self, x: i64, y: i64) -> f64 {
+        let (j, m) = ((x - self.x_lo) as usize, (y - self.y_lo) as usize);
+        let half = std::f64::consts::FRAC_PI_2 * self.radius * self.radius;
+        let (c0, c1) = (self.columns[j], self.columns[j + 1]);
+        let (r0, r1) = (self.rows[m], self.rows[m + 1]);
+        // The strip between the rows, left of each column; their difference is the cell.
+        let left = corner_area(c0, r1, half) - corner_area(c0, r0, half);
+        let right = corner_area(c1, r1, half) - corner_area(c1, r0, half);
+        (right - left).clamp(0.0, 1.0)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -123,6 +220,59 @@ mod tests {
                 for x in 0..40 {
                     let e = cell_fraction(c, r, x, y);
                     assert!((0.0..=1.0).contains(&e));
+                    total += e;
+                }
+            }
+            let exact = std::f64::consts::PI * r * r;
+            assert!((total - exact).abs() < 1e-11 * exact, "{total} vs {exact}");
+        }
+    }
+
+    #[test]
+    fn line_tables_give_the_exact_cell_areas() {
+        // Radii from under a cell to 40 cells, centres on and off the grid lines.
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut cases: Vec<([f64; 2], f64)> = vec![
+            ([10.0, 10.0], 3.0),
+            ([10.5, 10.5], 2.5),
+            ([-3.25, 7.0], 5.0),
+            ([0.0, 0.0], 0.4),
+        ];
+        for _ in 0..200 {
+            let r = 0.3 + 40.0 * next() * next();
+            cases.push(([200.0 * next() - 100.0, 200.0 * next() - 100.0], r));
+        }
+        for (c, r) in cases {
+            let (x_lo, nx) = box_lines(c[0], r);
+            let (y_lo, ny) = box_lines(c[1], r);
+            let columns: Vec<_> = (0..nx)
+                .map(|j| column_line(c, r, (x_lo + j as i64) as f64))
+                .collect();
+            let rows: Vec<_> = (0..ny)
+                .map(|m| row_line(c, r, (y_lo + m as i64) as f64))
+                .collect();
+            let areas = CellAreas {
+                columns: &columns,
+                rows: &rows,
+                x_lo,
+                y_lo,
+                radius: r,
+            };
+            let tol = 1e-14 * (1.0 + r * r);
+            let mut total = 0.0;
+            for y in y_lo..y_lo + ny as i64 - 1 {
+                for x in x_lo..x_lo + nx as i64 - 1 {
+                    let (e, want) = (areas.fraction(x, y), cell_fraction(c, r, x, y));
+                    assert!(
+                        (e - want).abs() <= tol,
+                        "disk {c:?} r {r}: cell ({x}, {y}) {e} vs {want}"
+                    );
                     total += e;
                 }
             }

@@ -2,7 +2,7 @@
 //! bounce-back schemes) and how much of each cell it fills (the partially saturated
 //! method).
 
-use super::geometry::{cell_fraction, covers};
+use super::geometry::{covers, CellAreas};
 
 /// No grain covers the cell.
 pub const NONE: u32 = u32::MAX;
@@ -266,8 +266,8 @@ pub struct Share {
 
 /// Visit the shares in row `y` of grain `g` seen at image centre `c`: every interior
 /// plain-fluid cell of that row it overlaps, in increasing x, with its exact solid fraction
-/// when `exact` (0 otherwise: the counting pass of a parallel build). Cells wholly inside
-/// or outside skip the exact area. `rank` is left 0.
+/// taken from `exact` (the image's [`CellAreas`]; `None` gives 0: the counting pass of a
+/// parallel build). Cells wholly inside or outside skip the exact area. `rank` is left 0.
 #[allow(clippy::too_many_arguments)]
 pub fn shares_in_row(
     frame: &SlabFrame,
@@ -276,7 +276,7 @@ pub fn shares_in_row(
     g: usize,
     c: [f64; 2],
     y: i64,
-    exact: bool,
+    exact: Option<&CellAreas<'_>>,
     mut visit: impl FnMut(Share),
 ) {
     let r = grain.radius;
@@ -296,14 +296,15 @@ pub fn shares_in_row(
         if nx_ * nx_ + ny_ * ny_ >= r * r {
             continue;
         }
-        let fraction = if !exact {
-            0.0
-        } else {
-            let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
-            if fx_ * fx_ + fy_ * fy_ <= r * r {
-                1.0
-            } else {
-                cell_fraction(c, r, x + x0, y)
+        let fraction = match exact {
+            None => 0.0,
+            Some(areas) => {
+                let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
+                if fx_ * fx_ + fy_ * fy_ <= r * r {
+                    1.0
+                } else {
+                    areas.fraction(x + x0, y)
+                }
             }
         };
         visit(Share {

@@ -4,6 +4,7 @@
 
 use super::exchange::{Coupler, Unstable};
 use super::gather::{gather, group_by_row, row_of, Shared};
+use super::geometry::{box_lines, column_line, row_line, CellAreas};
 use super::map::{share_rows, shares_in_row, GrainView, Share};
 use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
@@ -14,24 +15,75 @@ impl Coupler {
     /// (in parallel over the rows), each row's grains in id order, each grain's images in
     /// turn, cells in increasing x: the grain-by-grain list, grouped by row. Fills `sorted`
     /// (each share's `rank` is its place in its row) and `offsets` (where each row starts).
+    /// The exact areas come from per-image tables of the grid lines around each disk
+    /// (built in parallel first), so a cell costs no square root or arcsine.
     pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let fluid = |k: usize| lat.is_fluid_at(k);
-        // Each grain image's rows, then grouped by row (grain order within a row).
+        // The grain images that reach the slab's rows, and each one's rows.
+        self.disk_images.clear();
         self.row_images.clear();
         for (g, grain) in views.iter().enumerate() {
             for c in f.images(grain) {
                 let (ya, yb) = share_rows(&f, c, grain.radius);
+                if ya > yb {
+                    continue;
+                }
+                let image = self.disk_images.len() as u32;
+                self.disk_images.push((g as u32, c));
                 for y in ya..=yb {
-                    self.row_images.push((g as u32, c, y as u32));
+                    self.row_images.push((image, y as u32));
                 }
             }
         }
+        // Each image's line tables.
+        let disks = &self.disk_images;
+        let radius = |i: usize| views[disks[i].0 as usize].radius;
+        gather(
+            disks.len(),
+            &mut self.column_start,
+            &mut self.column_lines,
+            |i| box_lines(disks[i].1[0], radius(i)).1,
+            |i, out| {
+                let (c, r) = (disks[i].1, radius(i));
+                let x_lo = box_lines(c[0], r).0;
+                for (j, line) in out.iter_mut().enumerate() {
+                    *line = column_line(c, r, (x_lo + j as i64) as f64);
+                }
+            },
+        );
+        gather(
+            disks.len(),
+            &mut self.row_start,
+            &mut self.row_lines,
+            |i| box_lines(disks[i].1[1], radius(i)).1,
+            |i, out| {
+                let (c, r) = (disks[i].1, radius(i));
+                let y_lo = box_lines(c[1], r).0;
+                for (m, line) in out.iter_mut().enumerate() {
+                    *line = row_line(c, r, (y_lo + m as i64) as f64);
+                }
+            },
+        );
+        let (columns, rows) = (
+            (&self.column_start, &self.column_lines),
+            (&self.row_start, &self.row_lines),
+        );
+        let areas = |i: usize| {
+            let (c, r) = (disks[i].1, radius(i));
+            CellAreas {
+                columns: &columns.1[columns.0[i] as usize..columns.0[i + 1] as usize],
+                rows: &rows.1[rows.0[i] as usize..rows.0[i + 1] as usize],
+                x_lo: box_lines(c[0], r).0,
+                y_lo: box_lines(c[1], r).0,
+                radius: r,
+            }
+        };
         let images = &self.row_images;
         group_by_row(
             images.len(),
             f.ny,
-            |i| images[i].2 as usize,
+            |i| images[i].1 as usize,
             &mut self.image_rows,
             &mut self.image_order,
         );
@@ -39,7 +91,7 @@ impl Coupler {
         let in_row = |y: usize| {
             order[starts[y] as usize..starts[y + 1] as usize]
                 .iter()
-                .map(|&i| &images[i as usize])
+                .map(|&i| images[i as usize].0 as usize)
         };
         gather(
             f.ny,
@@ -47,19 +99,18 @@ impl Coupler {
             &mut self.sorted,
             |y| {
                 let mut n = 0;
-                for &(g, c, _) in in_row(y) {
-                    let grain = &views[g as usize];
-                    shares_in_row(&f, &fluid, grain, g as usize, c, y as i64, false, |_| {
-                        n += 1
-                    });
+                for i in in_row(y) {
+                    let (g, c) = (disks[i].0 as usize, disks[i].1);
+                    shares_in_row(&f, &fluid, &views[g], g, c, y as i64, None, |_| n += 1);
                 }
                 n
             },
             |y, out| {
                 let mut at = 0;
-                for &(g, c, _) in in_row(y) {
-                    let grain = &views[g as usize];
-                    shares_in_row(&f, &fluid, grain, g as usize, c, y as i64, true, |s| {
+                for i in in_row(y) {
+                    let (g, c) = (disks[i].0 as usize, disks[i].1);
+                    let exact = areas(i);
+                    shares_in_row(&f, &fluid, &views[g], g, c, y as i64, Some(&exact), |s| {
                         // Keep the grain order among shares of one cell: tag with the
                         // share's place in the row.
                         out[at] = Share {
