@@ -111,7 +111,8 @@ pub struct Coupler {
     /// The grain (view) of each of the link plan's bodies, and each view's first body.
     pub(super) body_grain: Vec<u32>,
     pub(super) body_start: Vec<u32>,
-    /// Per body of the link plan: its window of the column sums (scratch of the collect).
+    /// Per body of the link plan (per grain image with PSM): its window of the column
+    /// sums (scratch of the collect).
     pub(super) body_windows: Vec<super::sums::Window>,
     pub(super) psm: PsmPlan,
     /// Momentum per link or share of the last exchange, and scratch lists.

@@ -246,25 +246,24 @@ pub fn nearest_image_at(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> (usize
     (at, best)
 }
 
-/// One grain's share of one cell for the partially saturated method.
+/// One grain's share of one cell for the partially saturated method (24 bytes: the map
+/// writes ~250 k of them per step on the seed's Table 5.3 case, and the plan and the
+/// collect read them back).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Share {
+    /// Solid fraction ε of the cell covered by this grain (exact disk–square area).
+    pub fraction: f64,
     /// Padded cell index.
     pub cell: u32,
-    /// Its local row.
-    pub row: u32,
     /// Its place in its row as mapped (keeps the grain order among a cell's shares when
     /// the row is sorted by cell).
     pub rank: u32,
-    /// Grain index.
-    pub grain: u32,
-    /// Solid fraction ε of the cell covered by this grain (exact disk–square area).
-    pub fraction: f64,
-    /// The grain's centre image nearest to the cell (global lattice coordinates).
-    pub centre: [f64; 2],
+    /// The grain image (its index in the map's list of images that reach the slab, each
+    /// a grain and the centre the cell sees).
+    pub image: u32,
 }
 
-/// Visit the shares in row `y` of grain `g` seen at image centre `c`: every interior
+/// Visit the shares in row `y` of grain image `image` (of `grain`, centred at `c`): every interior
 /// plain-fluid cell of that row it overlaps, in increasing x, with its exact solid fraction
 /// taken from `exact` (the image's [`CellAreas`]; `None` gives 0: the counting pass of a
 /// parallel build). Cells wholly inside or outside skip the exact area. `rank` is left 0.
@@ -273,7 +272,7 @@ pub fn shares_in_row(
     frame: &SlabFrame,
     fluid: &impl Fn(usize) -> bool,
     grain: &GrainView,
-    g: usize,
+    image: u32,
     c: [f64; 2],
     y: i64,
     exact: Option<&CellAreas<'_>>,
@@ -308,12 +307,10 @@ pub fn shares_in_row(
             }
         };
         visit(Share {
-            cell: k as u32,
-            row: y as u32,
-            rank: 0,
-            grain: g as u32,
             fraction,
-            centre: c,
+            cell: k as u32,
+            rank: 0,
+            image,
         });
     }
 }

@@ -101,7 +101,9 @@ impl Coupler {
                 let mut n = 0;
                 for i in in_row(y) {
                     let (g, c) = (disks[i].0 as usize, disks[i].1);
-                    shares_in_row(&f, &fluid, &views[g], g, c, y as i64, None, |_| n += 1);
+                    shares_in_row(&f, &fluid, &views[g], i as u32, c, y as i64, None, |_| {
+                        n += 1
+                    });
                 }
                 n
             },
@@ -110,15 +112,24 @@ impl Coupler {
                 for i in in_row(y) {
                     let (g, c) = (disks[i].0 as usize, disks[i].1);
                     let exact = areas(i);
-                    shares_in_row(&f, &fluid, &views[g], g, c, y as i64, Some(&exact), |s| {
-                        // Keep the grain order among shares of one cell: tag with the
-                        // share's place in the row.
-                        out[at] = Share {
-                            rank: at as u32,
-                            ..s
-                        };
-                        at += 1;
-                    });
+                    shares_in_row(
+                        &f,
+                        &fluid,
+                        &views[g],
+                        i as u32,
+                        c,
+                        y as i64,
+                        Some(&exact),
+                        |s| {
+                            // Keep the grain order among shares of one cell: tag with the
+                            // share's place in the row.
+                            out[at] = Share {
+                                rank: at as u32,
+                                ..s
+                            };
+                            at += 1;
+                        },
+                    );
                 }
             },
         );
@@ -132,6 +143,7 @@ impl Coupler {
         let tau = lat.tau0();
         let plan = &mut self.psm;
         let sorted = &mut self.sorted;
+        let disks = &self.disk_images;
         {
             let offsets = &self.offsets;
             let base = Shared(sorted.as_mut_ptr());
@@ -202,7 +214,8 @@ impl Coupler {
                 let b = e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5));
                 let centre = f.centre_in_row(row[j].cell as usize, y);
                 for (s, sh) in group.iter().enumerate() {
-                    let grain = &views[sh.grain as usize];
+                    let (g, image) = disks[sh.image as usize];
+                    let grain = &views[g as usize];
                     out[j + s] = SolidShare {
                         // A cell whose overlap rounds to nothing stays plain fluid.
                         b: if eps > 0.0 {
@@ -211,7 +224,7 @@ impl Coupler {
                             0.0
                         },
                         velocity: GrainView {
-                            centre: sh.centre,
+                            centre: image,
                             ..*grain
                         }
                         .surface_velocity(centre),
@@ -233,29 +246,42 @@ impl Coupler {
         bad: Option<(usize, f64)>,
     ) -> Option<Unstable> {
         let f = self.frame;
+        // Each grain image's window of its grain's column sums.
+        let mut windows = std::mem::take(&mut self.body_windows);
+        windows.clear();
+        windows.extend(self.disk_images.iter().map(|&(g, image)| {
+            let g = g as usize;
+            self.sums.window(g, views[g].centre[0], image[0])
+        }));
         let (plan, sorted, momentum) = (&self.psm, &self.sorted, &self.share_momentum);
+        let (disks, win) = (&self.disk_images, &windows);
         self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
-            for (c, &k) in plan.cells.iter().enumerate() {
-                let y = sorted[plan.start[c] as usize].row as usize;
-                let col = (f.x_in_row(k as usize, y) + f.x0 as i64) as usize;
-                if !band.contains(&col) {
-                    continue;
-                }
-                let centre = f.centre_in_row(k as usize, y);
-                for s in plan.start[c] as usize..plan.start[c + 1] as usize {
-                    // Plan share s is sorted share s: its grain and the image it sees.
-                    let (sh, p) = (&sorted[s], momentum[s]);
-                    let g = sh.grain as usize;
-                    let arm = [centre[0] - sh.centre[0], centre[1] - sh.centre[1]];
-                    // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
-                    let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
-                    sums.add(g, views[g].centre[0], sh.centre[0], col, load);
+            for y in 0..plan.rows.len().saturating_sub(1) {
+                for c in plan.rows[y] as usize..plan.rows[y + 1] as usize {
+                    let k = plan.cells[c] as usize;
+                    let col = (f.x_in_row(k, y) + f.x0 as i64) as usize;
+                    if !band.contains(&col) {
+                        continue;
+                    }
+                    let centre = f.centre_in_row(k, y);
+                    for s in plan.start[c] as usize..plan.start[c + 1] as usize {
+                        // Plan share s is sorted share s: its grain and the image it sees.
+                        let (i, p) = (sorted[s].image as usize, momentum[s]);
+                        let image = disks[i].1;
+                        let arm = [centre[0] - image[0], centre[1] - image[1]];
+                        // The grain receives what the fluid gains, negated (seed eqs.
+                        // 5.53–5.54).
+                        let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
+                        sums.add_to(&win[i], col, load);
+                    }
                 }
             }
         });
+        self.body_windows = windows;
         bad.map(|(c, rho)| {
             let s = self.psm.start[c] as usize;
-            (self.psm.cells[c] as usize, self.sorted[s].grain, rho)
+            let image = self.sorted[s].image as usize;
+            (self.psm.cells[c] as usize, self.disk_images[image].0, rho)
         })
     }
 }
