@@ -234,33 +234,22 @@ impl Coupler {
                 }),
         );
         let (plan, momentum) = (&self.links, &self.link_momentum);
-        let rows = &plan.rows;
-        let columns = f.x0..f.x0 + f.nx;
         let win = &windows;
-        self.sums
-            .fill_by_columns(columns.start, columns.end, |band, sums| {
-                for y in 0..rows.len().saturating_sub(1) {
-                    for c in rows[y] as usize..rows[y + 1] as usize {
-                        let k = plan.cells[c] as usize;
-                        let col = (f.x_in_row(k, y) + f.x0 as i64) as usize;
-                        if !band.contains(&col) {
-                            continue;
-                        }
-                        let centre = f.centre_in_row(k, y);
-                        for l in plan.start[c] as usize..plan.start[c + 1] as usize {
-                            let (link, m) = (plan.links[l], momentum[l]);
-                            let (i, b) = (link.dir(), link.body());
-                            let image = plan.bodies[b].centre;
-                            let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                            let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
-                            let arm = [mid[0] - image[0], mid[1] - image[1]];
-                            let (px, py) = (-m * cx, -m * cy);
-                            let load = [px, py, arm[0] * py - arm[1] * px];
-                            sums.add_to(&win[b], col, load);
-                        }
-                    }
+        self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
+            f.band_cells(&plan.rows, &plan.cells, &band, |c, col, centre| {
+                for l in plan.start[c] as usize..plan.start[c + 1] as usize {
+                    let (link, m) = (plan.links[l], momentum[l]);
+                    let (i, b) = (link.dir(), link.body());
+                    let image = plan.bodies[b].centre;
+                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                    let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+                    let arm = [mid[0] - image[0], mid[1] - image[1]];
+                    let (px, py) = (-m * cx, -m * cy);
+                    let load = [px, py, arm[0] * py - arm[1] * px];
+                    sums.add_to(&win[b], col, load);
                 }
             });
+        });
         self.body_windows = windows;
         bad.map(|(c, rho)| {
             let l = self.links.start[c] as usize;

@@ -87,6 +87,30 @@ impl SlabFrame {
         [(x + self.x0 as i64) as f64 + 0.5, y as f64 + 0.5]
     }
 
+    /// Visit, in plan order, the cells of a row-grouped plan (`rows`: where each local
+    /// row's cells start, ny + 1 values, or empty; `cells`: padded indices) whose global
+    /// column lies in `band`: `visit(c, column, centre)` with the plan index, the global
+    /// column and the cell's centre (global lattice coordinates). The collects' walk: one
+    /// task per band of columns, each adding its columns' loads in the serial order.
+    #[inline]
+    pub fn band_cells(
+        &self,
+        rows: &[u32],
+        cells: &[u32],
+        band: &std::ops::Range<usize>,
+        mut visit: impl FnMut(usize, usize, [f64; 2]),
+    ) {
+        for y in 0..rows.len().saturating_sub(1) {
+            for c in rows[y] as usize..rows[y + 1] as usize {
+                let k = cells[c] as usize;
+                let col = (self.x_in_row(k, y) + self.x0 as i64) as usize;
+                if band.contains(&col) {
+                    visit(c, col, self.centre_in_row(k, y));
+                }
+            }
+        }
+    }
+
     /// The periodic images of a grain's centre that can reach this padded slab: the centre
     /// itself, shifted by ± the lattice size along periodic axes.
     pub fn images(&self, g: &GrainView) -> impl Iterator<Item = [f64; 2]> + '_ {

@@ -256,26 +256,17 @@ impl Coupler {
         let (plan, sorted, momentum) = (&self.psm, &self.sorted, &self.share_momentum);
         let (disks, win) = (&self.disk_images, &windows);
         self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
-            for y in 0..plan.rows.len().saturating_sub(1) {
-                for c in plan.rows[y] as usize..plan.rows[y + 1] as usize {
-                    let k = plan.cells[c] as usize;
-                    let col = (f.x_in_row(k, y) + f.x0 as i64) as usize;
-                    if !band.contains(&col) {
-                        continue;
-                    }
-                    let centre = f.centre_in_row(k, y);
-                    for s in plan.start[c] as usize..plan.start[c + 1] as usize {
-                        // Plan share s is sorted share s: its grain and the image it sees.
-                        let (i, p) = (sorted[s].image as usize, momentum[s]);
-                        let image = disks[i].1;
-                        let arm = [centre[0] - image[0], centre[1] - image[1]];
-                        // The grain receives what the fluid gains, negated (seed eqs.
-                        // 5.53–5.54).
-                        let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
-                        sums.add_to(&win[i], col, load);
-                    }
+            f.band_cells(&plan.rows, &plan.cells, &band, |c, col, centre| {
+                for s in plan.start[c] as usize..plan.start[c + 1] as usize {
+                    // Plan share s is sorted share s: its grain and the image it sees.
+                    let (i, p) = (sorted[s].image as usize, momentum[s]);
+                    let image = disks[i].1;
+                    let arm = [centre[0] - image[0], centre[1] - image[1]];
+                    // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
+                    let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
+                    sums.add_to(&win[i], col, load);
                 }
-            }
+            });
         });
         self.body_windows = windows;
         bad.map(|(c, rho)| {
