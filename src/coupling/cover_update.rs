@@ -22,6 +22,7 @@
 use super::geometry::covers;
 use super::grain_neighbours::{moved, GrainNeighbours};
 use super::map::{GrainView, SlabFrame, NONE};
+use rayon::prelude::*;
 
 /// The farthest a grain may move in one remap (cells) for the map to be updated in place;
 /// beyond it (a grain crossing a periodic seam, a violent step) the caller maps afresh.
@@ -58,6 +59,8 @@ pub struct CoverUpdate {
     seen: Vec<u32>,
     /// Whole-lattice shifts of a grain's periodic images.
     shifts: Vec<[f64; 2]>,
+    /// Per range of grains: the changes its isolated grains make.
+    part_changes: Vec<Vec<Change>>,
 }
 
 impl CoverUpdate {
@@ -80,7 +83,7 @@ impl CoverUpdate {
         &mut self,
         f: &SlabFrame,
         new: &[GrainView],
-        fluid: &impl Fn(usize) -> bool,
+        fluid: &(impl Fn(usize) -> bool + Sync),
         owner: &[u32],
         mark: &mut [bool],
         out: &mut Vec<Change>,
@@ -127,12 +130,51 @@ impl CoverUpdate {
             }
         }
         self.near.find(f, old, new, reach);
+        // Isolated grains first, in parallel: their cells are no other grain's (before or
+        // after the move), so no cell is decided twice and each range of grains lists its
+        // own changes. The consumers sort what they take from the list, so its order (which
+        // depends on the number of ranges) does not reach the results.
+        let (near, shifts) = (&self.near, &self.shifts);
+        let parts = rayon::current_num_threads().clamp(1, 64);
+        let chunk = new.len().div_ceil(parts).max(1);
+        self.part_changes.resize_with(parts, Vec::new);
+        // Ranges past the last grain run no task: nothing of theirs may stay.
+        self.part_changes.iter_mut().for_each(Vec::clear);
+        let counts: (u64, u64) = old
+            .par_chunks_mut(chunk)
+            .zip(self.slack.par_chunks_mut(chunk))
+            .zip(self.part_changes.par_iter_mut())
+            .enumerate()
+            .map(|(t, ((old, slack), out))| {
+                let (mut decided, mut skipped) = (0, 0);
+                for (j, (old, slack)) in old.iter_mut().zip(slack.iter_mut()).enumerate() {
+                    let g = t * chunk + j;
+                    if !near.of(g).is_empty() {
+                        continue;
+                    }
+                    // No cell centre can have crossed the circle of an isolated grain that
+                    // moved less than its slack: its cells stay.
+                    if moved(old, &new[g]) < *slack - 1e-9 {
+                        skipped += 1;
+                        continue;
+                    }
+                    decided += 1;
+                    isolated_changes(f, shifts, old, &new[g], g as u32, fluid, owner, out);
+                    *old = new[g];
+                    *slack = slack_of(new[g].centre, new[g].radius);
+                }
+                (decided, skipped)
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        self.decided += counts.0;
+        self.skipped += counts.1;
+        for part in &self.part_changes {
+            out.extend_from_slice(part);
+        }
+        // Then the grains with neighbours, one by one: a cell in several of their disks is
+        // decided once (`mark`).
         for g in 0..new.len() {
-            let isolated = self.near.of(g).is_empty();
-            // No cell centre can have crossed the circle of an isolated grain that moved
-            // less than its slack: its cells stay.
-            if isolated && moved(&old[g], &new[g]) < self.slack[g] - 1e-9 {
-                self.skipped += 1;
+            if self.near.of(g).is_empty() {
                 continue;
             }
             self.decided += 1;
@@ -140,72 +182,98 @@ impl CoverUpdate {
                 let co = [old[g].centre[0] + s[0], old[g].centre[1] + s[1]];
                 let cn = [new[g].centre[0] + s[0], new[g].centre[1] + s[1]];
                 let r = new[g].radius;
-                let (xa, xb) = ((f.x0 as f64) - 1.0, (f.x0 + f.nx) as f64 + 1.0);
-                if co[0].max(cn[0]) + r < xa || co[0].min(cn[0]) - r > xb {
+                let Some((ya, yb)) = rows_in_reach(f, co, cn, r) else {
                     continue;
-                }
-                let ya = ((co[1].min(cn[1]) - r).floor() as i64).max(-1);
-                let yb = ((co[1].max(cn[1]) + r).floor() as i64).min(f.ny as i64);
+                };
                 for y in ya..=yb {
                     let o = chord(f, co, r, y);
                     let n = chord(f, cn, r, y);
-                    if isolated {
-                        // Only the difference of the two runs can change: cells leaving
-                        // the disk lose the grain, cells entering it gain it.
-                        let (leave, enter) = (minus(o, n), minus(n, o));
-                        let runs = [
-                            (leave[0], NONE),
-                            (leave[1], NONE),
-                            (enter[0], g as u32),
-                            (enter[1], g as u32),
-                        ];
-                        for (run, to) in runs {
-                            for x in run.0..=run.1 {
-                                let k = f.padded(x - f.x0 as i64, y);
-                                if fluid(k) && owner[k] != to {
-                                    out.push(Change {
-                                        cell: k as u32,
-                                        old: owner[k],
-                                        new: to,
-                                    });
-                                }
+                    let rest = minus(n, o);
+                    for run in [o, rest[0], rest[1]] {
+                        for x in run.0..=run.1 {
+                            let k = f.padded(x - f.x0 as i64, y);
+                            if mark[k] || !fluid(k) {
+                                continue;
                             }
-                        }
-                    } else {
-                        let rest = minus(n, o);
-                        for run in [o, rest[0], rest[1]] {
-                            for x in run.0..=run.1 {
-                                let k = f.padded(x - f.x0 as i64, y);
-                                if mark[k] || !fluid(k) {
-                                    continue;
-                                }
-                                mark[k] = true;
-                                self.seen.push(k as u32);
-                                let to = decide(&self.near, &self.shifts, new, g, x, y);
-                                if owner[k] != to {
-                                    out.push(Change {
-                                        cell: k as u32,
-                                        old: owner[k],
-                                        new: to,
-                                    });
-                                }
+                            mark[k] = true;
+                            self.seen.push(k as u32);
+                            let to = decide(&self.near, &self.shifts, new, g, x, y);
+                            if owner[k] != to {
+                                out.push(Change {
+                                    cell: k as u32,
+                                    old: owner[k],
+                                    new: to,
+                                });
                             }
                         }
                     }
                 }
             }
             old[g] = new[g];
-            self.slack[g] = if isolated {
-                slack(new[g].centre, new[g].radius)
-            } else {
-                0.0
-            };
+            self.slack[g] = 0.0;
         }
         for &k in &self.seen {
             mark[k as usize] = false;
         }
         self.seen.clear();
         true
+    }
+}
+
+/// The rows (first, last) that the disk of radius `r` at `co` (before) or `cn` (after)
+/// can cover in the padded slab `f`, or `None` when it stays clear of the slab's columns.
+fn rows_in_reach(f: &SlabFrame, co: [f64; 2], cn: [f64; 2], r: f64) -> Option<(i64, i64)> {
+    let (xa, xb) = ((f.x0 as f64) - 1.0, (f.x0 + f.nx) as f64 + 1.0);
+    if co[0].max(cn[0]) + r < xa || co[0].min(cn[0]) - r > xb {
+        return None;
+    }
+    let ya = ((co[1].min(cn[1]) - r).floor() as i64).max(-1);
+    let yb = ((co[1].max(cn[1]) + r).floor() as i64).min(f.ny as i64);
+    Some((ya, yb))
+}
+
+/// The cells of the isolated grain `g` whose owner changes when it moves from `old` to
+/// `new` (appended to `out`): only the difference of its old and new run in each row can
+/// change, cells leaving the disk lose the grain and cells entering it gain it.
+#[allow(clippy::too_many_arguments)]
+fn isolated_changes(
+    f: &SlabFrame,
+    shifts: &[[f64; 2]],
+    old: &GrainView,
+    new: &GrainView,
+    g: u32,
+    fluid: &impl Fn(usize) -> bool,
+    owner: &[u32],
+    out: &mut Vec<Change>,
+) {
+    for s in shifts {
+        let co = [old.centre[0] + s[0], old.centre[1] + s[1]];
+        let cn = [new.centre[0] + s[0], new.centre[1] + s[1]];
+        let r = new.radius;
+        let Some((ya, yb)) = rows_in_reach(f, co, cn, r) else {
+            continue;
+        };
+        for y in ya..=yb {
+            let (o, n) = (chord(f, co, r, y), chord(f, cn, r, y));
+            let (leave, enter) = (minus(o, n), minus(n, o));
+            for (run, to) in [
+                (leave[0], NONE),
+                (leave[1], NONE),
+                (enter[0], g),
+                (enter[1], g),
+            ] {
+                for x in run.0..=run.1 {
+                    let k = f.padded(x - f.x0 as i64, y);
+                    if fluid(k) && owner[k] != to {
+                        out.push(Change {
+                            cell: k as u32,
+                            old: owner[k],
+                            new: to,
+                        });
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -254,7 +322,7 @@ fn chord(f: &SlabFrame, c: [f64; 2], r: f64, y: i64) -> (i64, i64) {
 /// circle, at least (cells): |d − r| = |d² − r²| / (d + r) over the cells nearest the
 /// circle in each row (the ends of the covered run and the cells just beyond, or the
 /// cell nearest the centre's column in a row without one), where d + r < 2r + 2.
-fn slack(c: [f64; 2], r: f64) -> f64 {
+fn slack_of(c: [f64; 2], r: f64) -> f64 {
     let gap = |x: i64, y: i64| {
         let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
         (dx * dx + dy * dy - r * r).abs()
