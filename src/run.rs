@@ -392,7 +392,11 @@ fn run_typed<T: Real + hdf5::H5Type>(
         }
         sim.record_probes(comm);
     }
-    let mut latest = (start_step, initial);
+    // The fields of the last snapshot are kept only when they are the final step's (the
+    // summary's totals reuse them): holding them between snapshots would cost three f64
+    // values per cell for the whole run.
+    let mut latest_step = start_step;
+    let mut final_fields = (n == start_step).then_some(initial);
     let mut progress = Progress::new(
         n,
         (nx * ny) as f64,
@@ -459,7 +463,10 @@ fn run_typed<T: Real + hdf5::H5Type>(
             let t = Instant::now();
             let f = sim.fields(comm);
             out.snapshot(step, &scene.units, &mut sim, comm, &f)?;
-            latest = (step, f);
+            latest_step = step;
+            if step == n {
+                final_fields = Some(f);
+            }
             sim.times.seconds[stage::OUTPUT] += t.elapsed().as_secs_f64();
         }
         // Signals and wall-clock cadence are agreed on by all ranks, so all checkpoint together.
@@ -493,12 +500,11 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let wall = start.elapsed().as_secs_f64();
     progress.finish();
     let steps = sim.fluid.lattice().steps_done();
-    let fields = if latest.0 == steps {
-        latest.1
-    } else {
-        sim.fields(comm)
+    let fields = match final_fields {
+        Some(f) if latest_step == steps => f,
+        _ => sim.fields(comm),
     };
-    if error.is_some() || (interrupted && latest.0 != steps) {
+    if error.is_some() || (interrupted && latest_step != steps) {
         // Keep the last good state for diagnosis; earlier snapshots stay untouched.
         out.snapshot(steps, &scene.units, &mut sim, comm, &fields)?;
     }

@@ -8,19 +8,19 @@ use super::h5par::{self, Access, Block};
 use super::OutputError;
 use decomposition::Comm;
 use hdf5::types::VarLenUnicode;
+use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// One scalar or vector field of a snapshot.
-pub struct FieldData<'a> {
+/// One scalar or vector field of a snapshot (its values come from
+/// [`SnapshotWriter::write`]'s producer).
+pub struct FieldSpec<'a> {
     /// Dataset name.
     pub name: &'a str,
     /// Units string (SI).
     pub units: &'a str,
     /// Components per cell (1 or 2).
     pub components: usize,
-    /// Values, row-major from the south row, components interleaved.
-    pub values: &'a [f64],
 }
 
 /// A snapshot already in the file: group name, time and (field, components).
@@ -116,12 +116,15 @@ impl SnapshotWriter {
 
     /// Write the group `/step_NNNNNNNN` with the given fields (this rank's block of
     /// each), then flush the file and rewrite the XDMF sidecar, so a crash later still
-    /// leaves every earlier snapshot readable. Collective.
-    pub fn write(
+    /// leaves every earlier snapshot readable. `values(i)` gives field i's values
+    /// (row-major from the south row, components interleaved) when it is written, so only
+    /// one field's values need exist at a time. Collective, and so is `values`.
+    pub fn write<'v>(
         &mut self,
         step: u64,
         time_s: f64,
-        fields: &[FieldData],
+        fields: &[FieldSpec],
+        mut values: impl FnMut(usize) -> Result<Cow<'v, [f64]>, OutputError>,
     ) -> Result<(), OutputError> {
         let h5 = |source| OutputError::Hdf5 {
             path: self.path.clone(),
@@ -145,7 +148,7 @@ impl SnapshotWriter {
             .and_then(|a| a.write_scalar(&step))
             .map_err(h5)?;
         let mut names = Vec::new();
-        for f in fields {
+        for (i, f) in fields.iter().enumerate() {
             let (shape, block) = if f.components == 1 {
                 (
                     vec![ny, nx],
@@ -172,7 +175,9 @@ impl SnapshotWriter {
                 builder = builder.chunk(chunk.as_slice()).deflate(self.compression);
             }
             let ds = builder.create(f.name).map_err(h5)?;
-            h5par::write_block(&ds, &block, f.values, self.access).map_err(h5)?;
+            let v = values(i)?;
+            h5par::write_block(&ds, &block, &v, self.access).map_err(h5)?;
+            drop(v);
             let units: VarLenUnicode = f.units.parse().expect("ASCII units");
             ds.new_attr::<VarLenUnicode>()
                 .create("units")

@@ -1,7 +1,7 @@
 //! Snapshot output of a fluid run: the HDF5 series (every rank its block), the grains of a
 //! coupled run beside it, and the pictures (rank 0).
 
-use crate::io::hdf5_out::{FieldData, Layout, SnapshotWriter};
+use crate::io::hdf5_out::{FieldSpec, Layout, SnapshotWriter};
 use crate::io::picture::{robust_limit, write_field_png, Scale};
 use crate::io::OutputError;
 use crate::lbm::fields::Fields;
@@ -9,6 +9,7 @@ use crate::lbm::Real;
 use crate::scene::{FieldName, Units, ValidScene};
 use crate::simulation::Simulation;
 use decomposition::Comm;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -69,41 +70,53 @@ impl Output {
         comm: &dyn Comm,
         f: &Fields,
     ) -> Result<(), OutputError> {
-        let density: Vec<f64> = f.rho.iter().map(|r| r * u.density_kg_m3).collect();
-        let velocity: Vec<f64> =
-            f.ux.iter()
-                .zip(&f.uy)
-                .flat_map(|(a, b)| [u.velocity_to_si(*a), u.velocity_to_si(*b)])
-                .collect();
-        let need_vorticity = self.pictures || self.fields.contains(&FieldName::Vorticity);
-        let vorticity: Vec<f64> = if need_vorticity {
-            sim.vorticity(comm, f).iter().map(|w| w / u.dt_s).collect()
+        // Each field is converted to SI when it is written, so that only one of them
+        // exists at a time beside `f`. The pictures need the vorticity: it is kept then.
+        let vorticity: Vec<f64> = if self.pictures {
+            si_vorticity(sim, comm, f, u)
         } else {
             Vec::new()
         };
-        let mut data = Vec::new();
-        for name in &self.fields {
-            let (units, components, values) = match name {
-                FieldName::Density => ("kg/m^3", 1, &density),
-                FieldName::Velocity => ("m/s", 2, &velocity),
-                FieldName::Vorticity => ("1/s", 1, &vorticity),
-            };
-            data.push(FieldData {
-                name: name.as_str(),
-                units,
-                components,
-                values,
-            });
-        }
+        let specs: Vec<FieldSpec> = self
+            .fields
+            .iter()
+            .map(|name| {
+                let (units, components) = match name {
+                    FieldName::Density => ("kg/m^3", 1),
+                    FieldName::Velocity => ("m/s", 2),
+                    FieldName::Vorticity => ("1/s", 1),
+                };
+                FieldSpec {
+                    name: name.as_str(),
+                    units,
+                    components,
+                }
+            })
+            .collect();
         let t = Instant::now();
-        self.h5.write(step, u.time_si(step), &data)?;
+        let names = &self.fields;
+        self.h5.write(step, u.time_si(step), &specs, |i| {
+            Ok(match names[i] {
+                FieldName::Density => {
+                    Cow::Owned(f.rho.iter().map(|r| r * u.density_kg_m3).collect())
+                }
+                FieldName::Velocity => Cow::Owned(
+                    f.ux.iter()
+                        .zip(&f.uy)
+                        .flat_map(|(a, b)| [u.velocity_to_si(*a), u.velocity_to_si(*b)])
+                        .collect(),
+                ),
+                FieldName::Vorticity if !vorticity.is_empty() => Cow::Borrowed(&vorticity),
+                FieldName::Vorticity => Cow::Owned(si_vorticity(sim, comm, f, u)),
+            })
+        })?;
         if let (Some(w), Some(c)) = (&mut self.grains, &sim.grains) {
             let hydro: Vec<[f64; 3]> = (0..c.system().owned()).map(|i| c.hydrodynamic(i)).collect();
             w.write_at(c.system(), comm, step, &hydro)?;
         }
         self.write_s += t.elapsed().as_secs_f64();
         let cells = (sim.partition.columns() * f.ny) as u64;
-        self.bytes += data
+        self.bytes += specs
             .iter()
             .map(|d| cells * d.components as u64 * 8)
             .sum::<u64>();
@@ -124,7 +137,11 @@ impl Output {
         }
         if self.pictures {
             // Pictures are one image of the whole lattice: gathered on every rank, drawn by rank 0.
-            let speed_local: Vec<f64> = velocity.chunks(2).map(|v| v[0].hypot(v[1])).collect();
+            let speed_local: Vec<f64> =
+                f.ux.iter()
+                    .zip(&f.uy)
+                    .map(|(a, b)| u.velocity_to_si(*a).hypot(u.velocity_to_si(*b)))
+                    .collect();
             let mut slab = f.clone();
             slab.ux = speed_local;
             slab.uy = vorticity;
@@ -166,4 +183,16 @@ impl Output {
         }
         Ok(())
     }
+}
+
+/// The vorticity of this slab's `f` in SI units (1/s). Collective.
+fn si_vorticity<T: Real>(
+    sim: &mut Simulation<T>,
+    comm: &dyn Comm,
+    f: &Fields,
+    u: &Units,
+) -> Vec<f64> {
+    let mut w = sim.vorticity(comm, f);
+    w.iter_mut().for_each(|w| *w /= u.dt_s);
+    w
 }
