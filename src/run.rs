@@ -396,7 +396,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
     // summary's totals reuse them): holding them between snapshots would cost three f64
     // values per cell for the whole run.
     let mut latest_step = start_step;
-    let mut final_fields = (n == start_step).then_some(initial);
+    let mut final_fields = (n <= start_step).then_some(initial);
     let mut progress = Progress::new(
         n,
         (nx * ny) as f64,
@@ -504,8 +504,10 @@ fn run_typed<T: Real + hdf5::H5Type>(
         Some(f) if latest_step == steps => f,
         _ => sim.fields(comm),
     };
-    if error.is_some() || (interrupted && latest_step != steps) {
-        // Keep the last good state for diagnosis; earlier snapshots stay untouched.
+    if (error.is_some() || interrupted) && latest_step != steps {
+        // Keep the state the run stopped in for diagnosis, unless that step's snapshot is
+        // written already (a step that fails leaves the step count where it was: the
+        // snapshot is then the last good state). Earlier snapshots stay untouched.
         out.snapshot(steps, &scene.units, &mut sim, comm, &fields)?;
     }
     let totals_final = sim.totals(comm, &fields);
@@ -516,7 +518,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
     };
     let grains_final = sim.grains.as_ref().map(|c| c.positions(comm));
     let results = if error.is_none() && !interrupted && !scene.scene.analyses.is_empty() {
-        let global = sim.gather_fields(comm, &fields);
+        let global = sim.gather_fields(comm, fields);
         analysis::run_all(&analysis::Inputs {
             scene,
             fields: &global,

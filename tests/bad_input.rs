@@ -219,6 +219,44 @@ fn blow_up_stops_with_step_and_cell_and_keeps_output() {
     );
 }
 
+/// The same blow-up with a snapshot after every step: the step that fails follows a
+/// snapshot, which stays the last good output (it is not written again), and the run still
+/// ends as unstable, not with an output error.
+#[test]
+fn blow_up_right_after_a_snapshot_keeps_it_and_stops_as_unstable() {
+    let s = GOOD
+        .replace(
+            "lattice_velocity = 0.05",
+            "lattice_velocity = 0.5\nallow_high_mach = true",
+        )
+        .replace("viscosity_m2_s = 1.0e-4", "viscosity_m2_s = 1.0e-7")
+        .replace(
+            "west = { kind = \"periodic\" }",
+            "west = { kind = \"wall\" }",
+        )
+        .replace(
+            "east = { kind = \"periodic\" }",
+            "east = { kind = \"wall\" }",
+        )
+        .replace("steps = 20", "steps = 5000\noutput_every = 1");
+    let (code, text, d) = grainflow(&s, &[]);
+    assert_eq!(code, 3, "{text}");
+    assert!(text.contains("unstable at step"), "{text}");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("out/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "unstable");
+    let steps = summary["steps"].as_u64().unwrap();
+    assert!(steps > 0 && steps < 5000);
+    // One picture pair per snapshot, every step up to the last good one, none twice.
+    let pics = std::fs::read_dir(d.path().join("out/pictures"))
+        .unwrap()
+        .count();
+    assert!(
+        pics >= 2 * steps as usize,
+        "{pics} pictures for {steps} steps"
+    );
+}
+
 #[test]
 fn check_and_info_commands() {
     let o = Command::new(env!("CARGO_BIN_EXE_grainflow"))
