@@ -531,11 +531,11 @@ impl<T: Real> Simulation<T> {
         )
     }
 
-    /// The whole lattice's fields from every slab's `f` (for analyses and pictures).
-    /// Collective.
-    pub fn gather_fields(&self, comm: &dyn Comm, f: &Fields) -> Fields {
+    /// The whole lattice's fields from every slab's `f` (for analyses and pictures); on one
+    /// rank, `f` itself. Collective.
+    pub fn gather_fields(&self, comm: &dyn Comm, f: Fields) -> Fields {
         if comm.size() == 1 {
-            return f.clone();
+            return f;
         }
         let (gnx, ny) = (self.partition.columns(), f.ny);
         let place = |all: &[f64]| -> Vec<f64> {

@@ -132,8 +132,9 @@ impl CoverUpdate {
         self.near.find(f, old, new, reach);
         // Isolated grains first, in parallel: their cells are no other grain's (before or
         // after the move), so no cell is decided twice and each range of grains lists its
-        // own changes. The consumers sort what they take from the list, so its order (which
-        // depends on the number of ranges) does not reach the results.
+        // own changes. The ranges' lists are joined in grain order, so the list holds the
+        // isolated grains' changes by grain, then the others' (its consumers sort what they
+        // take from it in any case).
         let (near, shifts) = (&self.near, &self.shifts);
         let parts = rayon::current_num_threads().clamp(1, 64);
         let chunk = new.len().div_ceil(parts).max(1);

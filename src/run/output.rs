@@ -94,7 +94,7 @@ impl Output {
             })
             .collect();
         let t = Instant::now();
-        let names = &self.fields;
+        let (names, pictures) = (&self.fields, self.pictures);
         self.h5.write(step, u.time_si(step), &specs, |i| {
             Ok(match names[i] {
                 FieldName::Density => {
@@ -106,7 +106,7 @@ impl Output {
                         .flat_map(|(a, b)| [u.velocity_to_si(*a), u.velocity_to_si(*b)])
                         .collect(),
                 ),
-                FieldName::Vorticity if !vorticity.is_empty() => Cow::Borrowed(&vorticity),
+                FieldName::Vorticity if pictures => Cow::Borrowed(&vorticity),
                 FieldName::Vorticity => Cow::Owned(si_vorticity(sim, comm, f, u)),
             })
         })?;
@@ -142,9 +142,15 @@ impl Output {
                     .zip(&f.uy)
                     .map(|(a, b)| u.velocity_to_si(*a).hypot(u.velocity_to_si(*b)))
                     .collect();
-            let mut slab = f.clone();
-            slab.ux = speed_local;
-            slab.uy = vorticity;
+            // Speed and vorticity travel in the velocity's places.
+            let mut slab = Fields {
+                nx: f.nx,
+                ny: f.ny,
+                rho: f.rho.clone(),
+                ux: speed_local,
+                uy: vorticity,
+                fluid: f.fluid.clone(),
+            };
             if let Some(c) = &sim.grains {
                 // Grains drawn as solid where they cover at least half a cell.
                 let lat = sim.fluid.lattice();
@@ -156,7 +162,7 @@ impl Output {
                     slab.fluid[k] &= frac[lat.padded_index(x, y)] < 0.5;
                 }
             }
-            let g = sim.gather_fields(comm, &slab);
+            let g = sim.gather_fields(comm, slab);
             if self.root {
                 let solid: Vec<bool> = g.fluid.iter().map(|b| !b).collect();
                 let (speed, vort) = (&g.ux, &g.uy);
