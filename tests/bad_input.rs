@@ -180,25 +180,33 @@ fn check_on_unknown_quantity_is_rejected_before_running() {
 }
 
 /// A closed cavity at Re ≈ 16 000 on 16 × 8 cells (τ ≈ 0.5015, lid u_lb = 0.5, BGK, no
-/// closure) cannot stay stable.
-#[test]
-fn blow_up_stops_with_step_and_cell_and_keeps_output() {
-    let s = GOOD
-        .replace(
-            "lattice_velocity = 0.05",
-            "lattice_velocity = 0.5\nallow_high_mach = true",
-        )
-        .replace("viscosity_m2_s = 1.0e-4", "viscosity_m2_s = 1.0e-7")
-        .replace(
-            "west = { kind = \"periodic\" }",
-            "west = { kind = \"wall\" }",
-        )
-        .replace(
-            "east = { kind = \"periodic\" }",
-            "east = { kind = \"wall\" }",
-        )
-        .replace("steps = 20", "steps = 5000\noutput_every = 10");
-    let (code, text, d) = grainflow(&s, &[]);
+/// closure), which cannot stay stable, with a snapshot every `output_every` steps.
+fn blow_up_scene(output_every: u64) -> String {
+    GOOD.replace(
+        "lattice_velocity = 0.05",
+        "lattice_velocity = 0.5\nallow_high_mach = true",
+    )
+    .replace("viscosity_m2_s = 1.0e-4", "viscosity_m2_s = 1.0e-7")
+    .replace(
+        "west = { kind = \"periodic\" }",
+        "west = { kind = \"wall\" }",
+    )
+    .replace(
+        "east = { kind = \"periodic\" }",
+        "east = { kind = \"wall\" }",
+    )
+    .replace(
+        "steps = 20",
+        &format!("steps = 5000\noutput_every = {output_every}"),
+    )
+}
+
+/// Run the blow-up cavity of [`blow_up_scene`]: it stops at a step with exit 3, names the
+/// cell, writes a summary with status "unstable", and keeps every snapshot before the
+/// failure and the last good state (each step's once: a snapshot written again would make
+/// HDF5 refuse the group and end the run with an output error).
+fn blow_up_keeps_output(output_every: u64) {
+    let (code, text, d) = grainflow(&blow_up_scene(output_every), &[]);
     assert_eq!(code, 3, "{text}");
     assert!(
         text.contains("unstable at step") && text.contains("cell ("),
@@ -209,52 +217,24 @@ fn blow_up_stops_with_step_and_cell_and_keeps_output() {
     assert_eq!(summary["status"], "unstable");
     let steps = summary["steps"].as_u64().unwrap();
     assert!(steps > 0 && steps < 5000);
-    // Every snapshot before the failure is still there, and the last good state too.
     let pics = std::fs::read_dir(d.path().join("out/pictures"))
         .unwrap()
-        .count();
+        .count() as u64;
     assert!(
-        pics >= 2 * (steps as usize / 10 + 1),
+        pics >= 2 * (steps / output_every + 1),
         "{pics} pictures for {steps} steps"
     );
 }
 
-/// The same blow-up with a snapshot after every step: the step that fails follows a
-/// snapshot, which stays the last good output (it is not written again), and the run still
-/// ends as unstable, not with an output error.
+#[test]
+fn blow_up_stops_with_step_and_cell_and_keeps_output() {
+    blow_up_keeps_output(10);
+}
+
+/// With a snapshot after every step, the failing step follows a snapshot.
 #[test]
 fn blow_up_right_after_a_snapshot_keeps_it_and_stops_as_unstable() {
-    let s = GOOD
-        .replace(
-            "lattice_velocity = 0.05",
-            "lattice_velocity = 0.5\nallow_high_mach = true",
-        )
-        .replace("viscosity_m2_s = 1.0e-4", "viscosity_m2_s = 1.0e-7")
-        .replace(
-            "west = { kind = \"periodic\" }",
-            "west = { kind = \"wall\" }",
-        )
-        .replace(
-            "east = { kind = \"periodic\" }",
-            "east = { kind = \"wall\" }",
-        )
-        .replace("steps = 20", "steps = 5000\noutput_every = 1");
-    let (code, text, d) = grainflow(&s, &[]);
-    assert_eq!(code, 3, "{text}");
-    assert!(text.contains("unstable at step"), "{text}");
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(d.path().join("out/summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["status"], "unstable");
-    let steps = summary["steps"].as_u64().unwrap();
-    assert!(steps > 0 && steps < 5000);
-    // One picture pair per snapshot, every step up to the last good one, none twice.
-    let pics = std::fs::read_dir(d.path().join("out/pictures"))
-        .unwrap()
-        .count();
-    assert!(
-        pics >= 2 * steps as usize,
-        "{pics} pictures for {steps} steps"
-    );
+    blow_up_keeps_output(1);
 }
 
 #[test]
