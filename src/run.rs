@@ -500,10 +500,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let wall = start.elapsed().as_secs_f64();
     progress.finish();
     let steps = sim.fluid.lattice().steps_done();
-    let fields = match final_fields {
-        Some(f) if latest_step == steps => f,
-        _ => sim.fields(comm),
-    };
+    // `final_fields` is only ever the state the loop ended in.
+    let fields = final_fields.unwrap_or_else(|| sim.fields(comm));
     if (error.is_some() || interrupted) && latest_step != steps {
         // Keep the state the run stopped in for diagnosis, unless that step's snapshot is
         // written already (a step that fails leaves the step count where it was: the

@@ -532,13 +532,17 @@ impl<T: Real> Simulation<T> {
     }
 
     /// The whole lattice's fields from every slab's `f` (for analyses and pictures); on one
-    /// rank, `f` itself. Collective.
+    /// rank, `f` itself. A field left empty on every rank (one the caller does not need)
+    /// stays empty. Collective.
     pub fn gather_fields(&self, comm: &dyn Comm, f: Fields) -> Fields {
         if comm.size() == 1 {
             return f;
         }
         let (gnx, ny) = (self.partition.columns(), f.ny);
         let place = |all: &[f64]| -> Vec<f64> {
+            if all.is_empty() {
+                return Vec::new();
+            }
             let mut out = vec![0.0; gnx * ny];
             let mut at = 0;
             for r in 0..comm.size() {

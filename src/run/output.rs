@@ -142,11 +142,11 @@ impl Output {
                     .zip(&f.uy)
                     .map(|(a, b)| u.velocity_to_si(*a).hypot(u.velocity_to_si(*b)))
                     .collect();
-            // Speed and vorticity travel in the velocity's places.
+            // Speed and vorticity travel in the velocity's places; the density is not drawn.
             let mut slab = Fields {
                 nx: f.nx,
                 ny: f.ny,
-                rho: f.rho.clone(),
+                rho: Vec::new(),
                 ux: speed_local,
                 uy: vorticity,
                 fluid: f.fluid.clone(),
