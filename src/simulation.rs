@@ -538,6 +538,23 @@ impl<T: Real> Simulation<T> {
         if comm.size() == 1 {
             return f;
         }
+        self.assemble(comm, &f, &|local| comm.all_gather_f64(local))
+    }
+
+    /// As [`Simulation::gather_fields`], but only the root (rank 0) receives the whole
+    /// lattice (`None` elsewhere): for pictures, which only the root draws, so that no
+    /// other rank holds the whole lattice. Collective.
+    pub fn gather_fields_at_root(&self, comm: &dyn Comm, f: Fields) -> Option<Fields> {
+        if comm.size() == 1 {
+            return Some(f);
+        }
+        let g = self.assemble(comm, &f, &|local| comm.gather_f64(local));
+        comm.is_root().then_some(g)
+    }
+
+    /// The whole lattice's fields from the slabs' `f`, each field's values collected in
+    /// rank order by `gather` (whose result may be empty on ranks that do not need it).
+    fn assemble(&self, comm: &dyn Comm, f: &Fields, gather: &dyn Fn(&[f64]) -> Vec<f64>) -> Fields {
         let (gnx, ny) = (self.partition.columns(), f.ny);
         let place = |all: &[f64]| -> Vec<f64> {
             if all.is_empty() {
@@ -559,10 +576,10 @@ impl<T: Real> Simulation<T> {
         Fields {
             nx: gnx,
             ny,
-            rho: place(&comm.all_gather_f64(&f.rho)),
-            ux: place(&comm.all_gather_f64(&f.ux)),
-            uy: place(&comm.all_gather_f64(&f.uy)),
-            fluid: place(&comm.all_gather_f64(&fluid_local))
+            rho: place(&gather(&f.rho)),
+            ux: place(&gather(&f.ux)),
+            uy: place(&gather(&f.uy)),
+            fluid: place(&gather(&fluid_local))
                 .into_iter()
                 .map(|v| v != 0.0)
                 .collect(),

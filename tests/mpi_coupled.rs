@@ -112,6 +112,45 @@ fn grains_next_to_a_periodic_seam_are_bit_identical_on_1_to_3_ranks() {
     );
 }
 
+/// The PNG pictures in `dir/pictures`, as (file name, bytes), by name.
+fn pictures(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir.join("pictures"))
+        .unwrap()
+        .map(|e| {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).unwrap())
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+#[test]
+fn pictures_on_3_ranks_are_those_of_1_rank() {
+    // Speed and vorticity with the grains drawn over them: rank 0 alone gathers the whole
+    // lattice and draws it, byte for byte as one rank does.
+    let d = tempfile::tempdir().unwrap();
+    let text = common::scene_variant(
+        "tests/scenes/mpi_grains_box.toml",
+        &[("pictures = false", "pictures = true")],
+    );
+    let scene = d.path().join("pictures.toml");
+    std::fs::write(&scene, text).unwrap();
+    let [one, three] = [1, 3].map(|n| {
+        let out = d.path().join(format!("np{n}"));
+        run_ok(n, scene.to_str().unwrap(), &out, &["--steps", "200"]);
+        pictures(&out)
+    });
+    let names = |p: &[(String, Vec<u8>)]| p.iter().map(|x| x.0.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&one), names(&three));
+    // Speed, vorticity and grains at steps 0 and 200.
+    assert_eq!(one.len(), 6, "{:?}", names(&one));
+    for ((name, a), (_, b)) in one.iter().zip(&three) {
+        assert!(a == b, "{name} differs between 1 and 3 ranks");
+    }
+}
+
 #[test]
 fn coupled_restart_on_another_rank_count_continues_bit_identically() {
     let d = tempfile::tempdir().unwrap();

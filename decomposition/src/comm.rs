@@ -39,6 +39,17 @@ pub trait Comm: Send + Sync {
     fn all_gather_f64(&self, local: &[f64]) -> Vec<f64>;
     /// Every rank's `local` slice of bytes concatenated in rank order.
     fn all_gather_bytes(&self, local: &[u8]) -> Vec<u8>;
+    /// Every rank's `local` slice concatenated in rank order on the root (rank 0), an empty
+    /// vector on the other ranks: for data only the root uses (pictures of the whole
+    /// lattice), which no other rank should have to hold. Collective.
+    fn gather_f64(&self, local: &[f64]) -> Vec<f64> {
+        let all = self.all_gather_f64(local);
+        if self.is_root() {
+            all
+        } else {
+            Vec::new()
+        }
+    }
     /// Block until every rank reaches this point.
     fn barrier(&self);
     /// Post every receive and send of one exchange round without blocking, run `overlap`
@@ -156,6 +167,7 @@ mod tests {
         assert_eq!(c.max_f64(3.0), 3.0);
         assert!(c.any(true) && !c.any(false));
         assert_eq!(ordered_sum(&c, &[0.1, 0.2, 0.3]), (0.1 + 0.2) + 0.3);
+        assert_eq!(c.gather_f64(&[4.0, 5.0]), [4.0, 5.0]);
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! (`MPI_THREAD_FUNNELED`); rayon workers never touch it.
 
 use crate::comm::{Comm, Incoming, Outgoing};
-use mpi::collective::{CommunicatorCollectives, SystemOperation};
+use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
 use mpi::datatype::PartitionMut;
 use mpi::point_to_point::{Destination, Source};
 use mpi::topology::{Communicator, SimpleCommunicator};
@@ -58,6 +58,11 @@ impl MpiComm {
     fn counts(&self, n: usize) -> (Vec<Count>, Vec<Count>, usize) {
         let mut counts = vec![0 as Count; self.size];
         self.world.all_gather_into(&(n as Count), &mut counts[..]);
+        Self::offsets(counts)
+    }
+
+    /// Displacements and total of per-rank `counts`.
+    fn offsets(counts: Vec<Count>) -> (Vec<Count>, Vec<Count>, usize) {
         let displs: Vec<Count> = counts
             .iter()
             .scan(0, |acc, &c| {
@@ -90,6 +95,24 @@ impl Comm for MpiComm {
         let mut out = vec![0u8; total];
         let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
         self.world.all_gather_varcount_into(local, &mut part);
+        out
+    }
+    /// Two `MPI_Gather`s to rank 0 (the counts, then the values): the other ranks keep
+    /// nothing of the result.
+    fn gather_f64(&self, local: &[f64]) -> Vec<f64> {
+        let root = self.world.process_at_rank(0);
+        let n = local.len() as Count;
+        if self.rank != 0 {
+            root.gather_into(&n);
+            root.gather_varcount_into(local);
+            return Vec::new();
+        }
+        let mut counts = vec![0 as Count; self.size];
+        root.gather_into_root(&n, &mut counts[..]);
+        let (counts, displs, total) = Self::offsets(counts);
+        let mut out = vec![0.0; total];
+        let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
+        root.gather_varcount_into_root(local, &mut part);
         out
     }
     fn barrier(&self) {

@@ -19,7 +19,6 @@ pub(super) struct Output {
     h5: SnapshotWriter,
     fields: Vec<FieldName>,
     pictures: bool,
-    root: bool,
     /// Bytes of field data in the file (global), and seconds this rank spent writing them.
     pub(super) bytes: u64,
     pub(super) write_s: f64,
@@ -45,7 +44,6 @@ impl Output {
             h5: SnapshotWriter::open(dir, comm, layout, scene.scene.run.compression, resume_after)?,
             fields: scene.scene.run.fields.clone(),
             pictures: scene.scene.run.pictures,
-            root: comm.is_root(),
             bytes: 0,
             write_s: 0.0,
             grains: match scene.scene.grains {
@@ -162,8 +160,7 @@ impl Output {
                     slab.fluid[k] &= frac[lat.padded_index(x, y)] < 0.5;
                 }
             }
-            let g = sim.gather_fields(comm, slab);
-            if self.root {
+            if let Some(g) = sim.gather_fields_at_root(comm, slab) {
                 let solid: Vec<bool> = g.fluid.iter().map(|b| !b).collect();
                 let (speed, vort) = (&g.ux, &g.uy);
                 let pics = self.dir.join("pictures");
