@@ -77,6 +77,23 @@ pub fn settling(
     Ok(())
 }
 
+/// What a draft-kiss-tumble analysis reads (the scene's `draft-kiss-tumble` keys).
+#[derive(Debug, Clone, Copy)]
+pub struct DktSetup<'a> {
+    /// Grain probe of the grain that starts below.
+    pub lower: &'a str,
+    /// Grain probe of the grain that starts above.
+    pub upper: &'a str,
+    /// Gap between the surfaces (m) that counts as touching.
+    pub contact_gap_m: f64,
+    /// Window at the end of the run for the final speeds (s).
+    pub window_s: f64,
+    /// Window [from, to] (s) for the fall speeds after separation.
+    pub fall_window_s: Option<[f64; 2]>,
+    /// One grain's terminal velocity alone in the same channel (m/s).
+    pub terminal_velocity_m_s: Option<f64>,
+}
+
 /// Draft, kiss and tumble of two grains (Fortes et al. 1987; seed §5.4.1), from the probes
 /// of the grain that starts below (`lower`) and above (`upper`). Times are in units of
 /// √(D/g). Results `dkt.*`:
@@ -85,18 +102,29 @@ pub fn settling(
 /// - `tumble_time`: the first time after the kiss that the upper grain's centre passes
 ///   below the lower one's (the pair has turned);
 /// - `separation_time`: the first time after the tumble that the gap exceeds D/2;
+/// - `second_kiss_time`: the first time after the separation that they touch again (a
+///   second draft–kiss–tumble cycle), NaN when they do not;
 /// - `draft` (1 when the upper grain falls faster than the lower before the kiss, else 0),
 ///   `tumbled`, `separated` (1 or 0);
 /// - `lower_velocity_m_s`, `upper_velocity_m_s`: their speeds averaged over the last
-///   `average_last_s`.
+///   `window_s`;
+/// - `leader_fall_m_s`, `trailer_fall_m_s`: with `fall_window_s`, each grain's fall speed
+///   (velocity along gravity) averaged over the window, the leader being the grain further
+///   along gravity at the window's end; NaN when the window is not wholly after the
+///   separation (or has no probe rows);
+/// - `leader_fall_deviation`, `trailer_fall_deviation`: with `terminal_velocity_m_s` too,
+///   fall speed / terminal velocity − 1 (the test: within 5 % after separation).
 pub fn draft_kiss_tumble(
     inp: &Inputs,
-    lower: &str,
-    upper: &str,
-    contact_gap_m: f64,
-    window_s: f64,
+    setup: &DktSetup<'_>,
     r: &mut Results,
 ) -> Result<(), AnalysisError> {
+    let (lower, upper, contact_gap_m, window_s) = (
+        setup.lower,
+        setup.upper,
+        setup.contact_gap_m,
+        setup.window_s,
+    );
     let a = find(inp, lower, "draft-kiss-tumble")?;
     let b = find(inp, upper, "draft-kiss-tumble")?;
     let (ra, rb) = (
@@ -107,7 +135,10 @@ pub fn draft_kiss_tumble(
         return Err(err("draft-kiss-tumble", "needs grains"));
     };
     let d = ra + rb;
-    let t_unit = (d / g.gravity_m_s2[0].hypot(g.gravity_m_s2[1])).sqrt();
+    let g_norm = g.gravity_m_s2[0].hypot(g.gravity_m_s2[1]);
+    let t_unit = (d / g_norm).sqrt();
+    // Unit vector along gravity (the fall direction).
+    let down = [g.gravity_m_s2[0] / g_norm, g.gravity_m_s2[1] / g_norm];
     let n = a.len().min(b.len());
     let col = |s: &Series, i: usize, c: usize| s.values[i * s.columns.len() + c];
     let gap = |i: usize| {
@@ -119,6 +150,7 @@ pub fn draft_kiss_tumble(
     let draft = kiss.is_some_and(|k| (0..k).any(|i| col(b, i, 3) < col(a, i, 3)));
     let tumble = kiss.and_then(|k| (k..n).find(|&i| col(b, i, 1) < col(a, i, 1)));
     let separate = tumble.and_then(|t| (t..n).find(|&i| gap(i) > 0.5 * d));
+    let second_kiss = separate.and_then(|s| (s..n).find(|&i| gap(i) < contact_gap_m));
     let time = |i: Option<usize>| i.map(|i| a.times[i] / t_unit).unwrap_or(f64::NAN);
     let flag = |i: Option<usize>| i.map(|_| 1.0).unwrap_or(0.0);
     let t_end = a.times[n - 1];
@@ -129,14 +161,45 @@ pub fn draft_kiss_tumble(
             .sum::<f64>()
             / rows.len().max(1) as f64
     };
+    // Fall speeds over the window, when it lies wholly after the separation.
+    let (mut leader, mut trailer) = (f64::NAN, f64::NAN);
+    if let (Some([from, to]), Some(sep)) = (setup.fall_window_s, separate) {
+        let rows: Vec<usize> = (0..n)
+            .filter(|&i| a.times[i] >= from && a.times[i] <= to)
+            .collect();
+        if let (Some(&last), true) = (rows.last(), from >= a.times[sep]) {
+            let along = |s: &Series, i: usize, c: usize| {
+                col(s, i, c) * down[0] + col(s, i, c + 1) * down[1]
+            };
+            let fall =
+                |s: &Series| rows.iter().map(|&i| along(s, i, 2)).sum::<f64>() / rows.len() as f64;
+            let (fa, fb) = (fall(a), fall(b));
+            (leader, trailer) = if along(a, last, 0) >= along(b, last, 0) {
+                (fa, fb)
+            } else {
+                (fb, fa)
+            };
+        }
+    }
+    let deviation = |u: f64| {
+        setup
+            .terminal_velocity_m_s
+            .map(|ut| u / ut - 1.0)
+            .unwrap_or(f64::NAN)
+    };
     r.insert("dkt.kiss_time".into(), time(kiss));
     r.insert("dkt.min_gap".into(), min_gap);
     r.insert("dkt.tumble_time".into(), time(tumble));
     r.insert("dkt.separation_time".into(), time(separate));
+    r.insert("dkt.second_kiss_time".into(), time(second_kiss));
     r.insert("dkt.draft".into(), draft as u8 as f64);
     r.insert("dkt.tumbled".into(), flag(tumble));
     r.insert("dkt.separated".into(), flag(separate));
     r.insert("dkt.lower_velocity_m_s".into(), mean_speed(a));
     r.insert("dkt.upper_velocity_m_s".into(), mean_speed(b));
+    r.insert("dkt.leader_fall_m_s".into(), leader);
+    r.insert("dkt.trailer_fall_m_s".into(), trailer);
+    r.insert("dkt.leader_fall_deviation".into(), deviation(leader));
+    r.insert("dkt.trailer_fall_deviation".into(), deviation(trailer));
     Ok(())
 }

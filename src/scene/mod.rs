@@ -9,6 +9,7 @@ mod grains_check;
 mod mpm;
 mod mpm_check;
 mod mpm_material_check;
+mod probes_check;
 mod schema;
 mod units;
 mod validate;

@@ -534,6 +534,16 @@ pub enum Analysis {
         contact_gap_m: f64,
         /// Window for the final speeds (s).
         average_last_s: f64,
+        /// Time window [from, to] (s) over which to average each grain's fall speed (its
+        /// velocity along gravity) after the pair has separated: `dkt.leader_fall_m_s` and
+        /// `dkt.trailer_fall_m_s`, the leader being the grain further along gravity at `to`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        fall_window_s: Option<[f64; 2]>,
+        /// Terminal velocity (m/s) of one grain alone in the same channel (measure it with a
+        /// `settling` analysis); with `fall_window_s`, gives `dkt.leader_fall_deviation` and
+        /// `dkt.trailer_fall_deviation` = fall speed / this − 1.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        terminal_velocity_m_s: Option<f64>,
     },
     /// Momentum of fluid plus grains: `momentum.relative_drift` = |p_end − p_0| / |p_0|
     /// (needs non-zero initial momentum), and `momentum.grains_x_kg_m_s` etc.

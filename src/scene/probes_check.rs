@@ -1,0 +1,237 @@
+//! Validation of a scene's probes and analyses: each names what exists and each key is
+//! possible, with the key, its line and the fix in the error.
+
+use super::schema::*;
+use super::validate::{positive, validate_checks, Context};
+use super::SceneError;
+
+/// Probes (unique names, inside the domain, naming what exists) and analyses (each with the
+/// probes and keys it needs).
+pub(super) fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
+    let lx = s.domain.cells[0] as f64 * s.domain.spacing_m;
+    let ly = s.domain.cells[1] as f64 * s.domain.spacing_m;
+    for (n, p) in s.probes.iter().enumerate() {
+        if s.probes[..n].iter().any(|q| q.name() == p.name()) {
+            return Err(ctx.err(
+                "name",
+                s.obstacles.len() + n,
+                format!("probe name `{}` is used twice", p.name()),
+            ));
+        }
+        match p {
+            Probe::Point { position_m, name } => {
+                if !(position_m[0] >= 0.0
+                    && position_m[0] < lx
+                    && position_m[1] >= 0.0
+                    && position_m[1] < ly)
+                {
+                    return Err(ctx.err(
+                        "position_m",
+                        0,
+                        format!("probe `{name}` lies outside the domain [0, {lx}) × [0, {ly}) m"),
+                    ));
+                }
+            }
+            Probe::Force { obstacle, name } => {
+                if !s.obstacles.iter().any(|o| o.name() == obstacle) {
+                    return Err(ctx.err("obstacle", 0, format!("force probe `{name}` names obstacle `{obstacle}`, which the scene does not define")));
+                }
+            }
+            Probe::Grain { name, .. } => {
+                if s.grains.is_none() {
+                    return Err(ctx.err(
+                        "id",
+                        0,
+                        format!("grain probe `{name}` needs grains: add [grains] and [coupling]"),
+                    ));
+                }
+            }
+            Probe::Deposit { name, .. } => {
+                if s.grains.is_none() {
+                    return Err(ctx.err(
+                        "kind",
+                        0,
+                        format!("deposit probe `{name}` needs grains: add [grains] and [coupling]"),
+                    ));
+                }
+            }
+        }
+    }
+    let probe_kind = |name: &str| s.probes.iter().find(|p| p.name() == name);
+    for a in &s.analyses {
+        match a {
+            Analysis::ForceCoefficients {
+                probe,
+                velocity_m_s,
+                length_m,
+                ..
+            } => {
+                if !matches!(probe_kind(probe), Some(Probe::Force { .. })) {
+                    return Err(ctx.err(
+                        "probe",
+                        0,
+                        format!("force-coefficients needs a force probe named `{probe}`"),
+                    ));
+                }
+                positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
+                positive(ctx, "length_m", *length_m, "the reference length")?;
+            }
+            Analysis::Strouhal {
+                probe,
+                velocity_m_s,
+                length_m,
+                ..
+            } => {
+                if !matches!(probe_kind(probe), Some(Probe::Point { .. })) {
+                    return Err(ctx.err(
+                        "probe",
+                        0,
+                        format!("strouhal needs a point probe named `{probe}`"),
+                    ));
+                }
+                positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
+                positive(ctx, "length_m", *length_m, "the reference length")?;
+            }
+            Analysis::Settling {
+                probe,
+                average_last_s,
+            } => {
+                if !matches!(probe_kind(probe), Some(Probe::Grain { .. })) {
+                    return Err(ctx.err(
+                        "probe",
+                        0,
+                        format!("settling needs a grain probe named `{probe}`"),
+                    ));
+                }
+                positive(
+                    ctx,
+                    "average_last_s",
+                    *average_last_s,
+                    "the averaging window",
+                )?;
+            }
+            Analysis::DraftKissTumble {
+                lower,
+                upper,
+                contact_gap_m,
+                average_last_s,
+                fall_window_s,
+                terminal_velocity_m_s,
+            } => {
+                for p in [lower, upper] {
+                    if !matches!(probe_kind(p), Some(Probe::Grain { .. })) {
+                        return Err(ctx.err(
+                            "lower",
+                            0,
+                            format!("draft-kiss-tumble needs a grain probe named `{p}`"),
+                        ));
+                    }
+                }
+                positive(ctx, "contact_gap_m", *contact_gap_m, "the contact gap")?;
+                positive(
+                    ctx,
+                    "average_last_s",
+                    *average_last_s,
+                    "the averaging window",
+                )?;
+                fall_window(s, ctx, *fall_window_s, *terminal_velocity_m_s)?;
+            }
+            Analysis::ColumnCollapse {
+                deposit,
+                pore_pressure,
+                ..
+            } => {
+                if s.grains.is_none() {
+                    return Err(ctx.err(
+                        "kind",
+                        0,
+                        "column-collapse in a fluid scene needs grains: add [grains] and [coupling]",
+                    ));
+                }
+                if !matches!(probe_kind(deposit), Some(Probe::Deposit { .. })) {
+                    return Err(ctx.err(
+                        "deposit",
+                        0,
+                        format!("column-collapse needs a deposit probe named `{deposit}`"),
+                    ));
+                }
+                if let Some(p) = pore_pressure {
+                    if !matches!(probe_kind(p), Some(Probe::Point { .. })) {
+                        return Err(ctx.err(
+                            "pore_pressure",
+                            0,
+                            format!("column-collapse needs a point probe named `{p}`"),
+                        ));
+                    }
+                }
+            }
+            Analysis::MomentumBalance if s.grains.is_none() => {
+                return Err(ctx.err(
+                    "kind",
+                    0,
+                    "momentum-balance needs grains: add [grains] and [coupling]",
+                ));
+            }
+            Analysis::Ghia {
+                u_reference,
+                v_reference,
+                ..
+            } => {
+                for (k, f) in [("u_reference", u_reference), ("v_reference", v_reference)] {
+                    if !ctx.base_dir.join(f).is_file() {
+                        return Err(ctx.err(
+                            k,
+                            0,
+                            format!(
+                                "reference file {} does not exist",
+                                ctx.base_dir.join(f).display()
+                            ),
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    validate_checks(&s.checks, ctx)
+}
+
+/// Each check gives expected with one tolerance, or max and/or min.
+/// The draft-kiss-tumble fall-speed window: 0 ≤ from < to, within the run when it is set
+/// by `end_time_s`; a terminal velocity needs a window and must be positive.
+fn fall_window(
+    s: &Scene,
+    ctx: &Context,
+    window: Option<[f64; 2]>,
+    terminal: Option<f64>,
+) -> Result<(), SceneError> {
+    if let Some([from, to]) = window {
+        if !(from.is_finite() && to.is_finite() && from >= 0.0 && from < to) {
+            return Err(ctx.err(
+                "fall_window_s",
+                0,
+                format!(
+                    "fall_window_s must be [from, to] with 0 ≤ from < to (s), got [{from}, {to}]"
+                ),
+            ));
+        }
+        if let Some(end) = s.run.end_time_s.filter(|&end| to > end) {
+            return Err(ctx.err(
+                "fall_window_s",
+                0,
+                format!("fall_window_s ends at {to} s, after the run ([run] end_time_s = {end}): shorten the window or run longer"),
+            ));
+        }
+    }
+    if let Some(u) = terminal {
+        positive(ctx, "terminal_velocity_m_s", u, "the terminal velocity")?;
+        if window.is_none() {
+            return Err(ctx.err(
+                "terminal_velocity_m_s",
+                0,
+                "terminal_velocity_m_s needs fall_window_s = [from, to] (s): the time window after separation to compare the fall speeds in",
+            ));
+        }
+    }
+    Ok(())
+}
