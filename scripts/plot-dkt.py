@@ -58,7 +58,8 @@ def main():
         "dkt.trailer_fall_deviation",
     ):
         if k in r:
-            print(f"{k} = {r[k]:.2f}")
+            # summary.json writes a result that did not happen (NaN) as null.
+            print(f"{k} = {r[k]:.3f}" if r[k] is not None else f"{k}: none")
     try:
         import matplotlib
 
@@ -76,7 +77,7 @@ def main():
     ax.plot(t, gap, label="gap δ / D")
     marks = (("dkt.kiss_time", ":"), ("dkt.tumble_time", "--"), ("dkt.second_kiss_time", ":"))
     for k, style in marks:
-        if k in r and r[k] == r[k]:
+        if r.get(k) is not None and r[k] == r[k]:
             ax.axvline(r[k], color="grey", ls=style, lw=0.8)
             label = k.split(".")[1].replace("_time", "").replace("_", " ")
             ax.text(r[k], ax.get_ylim()[1], label, fontsize=8, va="top")
@@ -95,7 +96,7 @@ def main():
         if w:
             bx.axvspan(w[0] / unit, w[1] / unit, color="grey", alpha=0.15, label="fall window")
         for k, style in marks:
-            if k in r and r[k] == r[k]:
+            if r.get(k) is not None and r[k] == r[k]:
                 bx.axvline(r[k], color="grey", ls=style, lw=0.8)
         bx.set_ylabel(f"fall speed / U_t (U_t = {ut:.4g} m/s)")
         bx.set_xlabel("t / √(D/g)")
