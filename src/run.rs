@@ -516,17 +516,24 @@ fn run_typed<T: Real + hdf5::H5Type>(
     };
     let grains_final = sim.grains.as_ref().map(|c| c.positions(comm));
     let results = if error.is_none() && !interrupted && !scene.scene.analyses.is_empty() {
-        let global = sim.gather_fields(comm, fields);
-        analysis::run_all(&analysis::Inputs {
-            scene,
-            fields: &global,
-            steps,
-            series: &sim.series,
-            totals: (totals_initial, totals_final),
-            momentum: momentum_initial.zip(momentum_final),
-            grain_radius: grain_radius.clone(),
-            grains: grains_final.map(|f| (grains_initial.clone(), f)),
-        })?
+        // Only rank 0 holds the whole lattice (and only when an analysis reads it); it runs
+        // the analyses and every rank receives its results.
+        let global = analysis::needs_fields(scene)
+            .then(|| sim.gather_fields_at_root(comm, fields))
+            .flatten();
+        let local = comm.is_root().then(|| {
+            analysis::run_all(&analysis::Inputs {
+                scene,
+                fields: global.as_ref(),
+                steps,
+                series: &sim.series,
+                totals: (totals_initial, totals_final),
+                momentum: momentum_initial.zip(momentum_final),
+                grain_radius: grain_radius.clone(),
+                grains: grains_final.map(|f| (grains_initial.clone(), f)),
+            })
+        });
+        analysis::share_from_root(comm, local)?
     } else if error.is_none() && !interrupted {
         let mut r = Results::new();
         r.insert("run.mass".into(), totals_final.mass);

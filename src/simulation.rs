@@ -531,30 +531,22 @@ impl<T: Real> Simulation<T> {
         )
     }
 
-    /// The whole lattice's fields from every slab's `f` (for analyses and pictures); on one
-    /// rank, `f` itself. A field left empty on every rank (one the caller does not need)
-    /// stays empty. Collective.
-    pub fn gather_fields(&self, comm: &dyn Comm, f: Fields) -> Fields {
-        if comm.size() == 1 {
-            return f;
-        }
-        self.assemble(comm, &f, &|local| comm.all_gather_f64(local))
-    }
-
-    /// As [`Simulation::gather_fields`], but only the root (rank 0) receives the whole
-    /// lattice (`None` elsewhere): for pictures, which only the root draws, so that no
-    /// other rank holds the whole lattice. Collective.
+    /// The whole lattice's fields from every slab's `f`, on the root (rank 0) only (`None`
+    /// elsewhere), so that no other rank holds the whole lattice: for the pictures and the
+    /// analyses, which only the root computes. On one rank, `f` itself. A field left empty
+    /// on every rank (one the caller does not need) stays empty. Collective.
     pub fn gather_fields_at_root(&self, comm: &dyn Comm, f: Fields) -> Option<Fields> {
         if comm.size() == 1 {
             return Some(f);
         }
-        let g = self.assemble(comm, &f, &|local| comm.gather_f64(local));
+        let g = self.assemble(comm, &f);
         comm.is_root().then_some(g)
     }
 
-    /// The whole lattice's fields from the slabs' `f`, each field's values collected in
-    /// rank order by `gather` (whose result may be empty on ranks that do not need it).
-    fn assemble(&self, comm: &dyn Comm, f: &Fields, gather: &dyn Fn(&[f64]) -> Vec<f64>) -> Fields {
+    /// The whole lattice's fields from the slabs' `f`, each field's values gathered in
+    /// rank order on the root (empty fields on the other ranks).
+    fn assemble(&self, comm: &dyn Comm, f: &Fields) -> Fields {
+        let gather = |local: &[f64]| comm.gather_f64(local);
         let (gnx, ny) = (self.partition.columns(), f.ny);
         let place = |all: &[f64]| -> Vec<f64> {
             if all.is_empty() {

@@ -280,3 +280,54 @@ fn probes_next_to_rank_faces_match_one_rank() {
         }
     }
 }
+
+/// An analysis that reads the whole lattice (Taylor–Green) runs on rank 0, which alone
+/// gathers the fields; every rank gets its results: on 3 ranks they equal 1 rank's.
+#[test]
+fn field_analysis_on_3_ranks_equals_1_rank() {
+    let d = tempfile::tempdir().unwrap();
+    let scene = "jobs/taylor-green/scene.toml";
+    let (one, three) = (d.path().join("np1"), d.path().join("np3"));
+    run_ok(1, scene, &one, &[]);
+    run_ok(3, scene, &three, &[]);
+    let (a, b) = (summary(&one), summary(&three));
+    assert_eq!(b["ranks"], 3);
+    let l2 = &a["results"]["taylor_green.l2_rel_error"];
+    assert!(l2.as_f64().is_some_and(|v| v > 0.0 && v < 4e-3), "{l2}");
+    assert_eq!(a["results"], b["results"]);
+    assert_eq!(a["checks"], b["checks"]);
+}
+
+/// An analysis that fails on rank 0 fails the run on every rank with rank 0's message (no
+/// rank waits for results that never come).
+#[test]
+fn failing_analysis_on_2_ranks_stops_every_rank_with_its_message() {
+    let d = tempfile::tempdir().unwrap();
+    // Couette needs walls on south and north; this periodic box has none.
+    let text = std::fs::read_to_string(root().join("jobs/taylor-green/scene.toml"))
+        .unwrap()
+        .replace("kind = \"taylor-green\"\n", "kind = \"couette\"\n")
+        .replace(
+            "quantity = \"taylor_green.l2_rel_error\"",
+            "quantity = \"couette.l2_rel_error\"",
+        );
+    let scene = d.path().join("couette-in-a-box.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = d.path().join("np2");
+    let o = grainflow(
+        2,
+        &[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(
+        err.matches("analysis `couette`: needs walls").count(),
+        2,
+        "both ranks report rank 0's error: {err}"
+    );
+}

@@ -1,8 +1,20 @@
 //! Analytic and tabulated reference flows: Poiseuille, Couette, Taylor–Green, Ghia cavity.
 
 use super::{err, AnalysisError, Inputs, Results};
+use crate::lbm::fields::Fields;
 use crate::scene::{BoundarySpec, Initial};
 use std::f64::consts::PI;
+
+/// The whole lattice's final fields, which the run gathers (on rank 0) only for scenes whose
+/// analyses read them ([`super::needs_fields`]).
+fn fields<'a>(inp: &Inputs<'a>, analysis: &str) -> Result<&'a Fields, AnalysisError> {
+    inp.fields.ok_or_else(|| {
+        err(
+            analysis,
+            "the final fields were not gathered for this analysis",
+        )
+    })
+}
 
 /// Body-force Poiseuille between walls at y = 0 and y = H: u(y) = g/(2ν) y (H − y)
 /// (lattice units, half-way walls at the domain edges). Profile taken at the middle column.
@@ -13,7 +25,7 @@ pub fn poiseuille(inp: &Inputs, r: &mut Results) -> Result<(), AnalysisError> {
     }
     let u = &inp.scene.units;
     let g = u.acceleration_to_lattice(s.fluid.body_acceleration_m_s2[0]);
-    let f = inp.fields;
+    let f = fields(inp, "poiseuille")?;
     let (nx, ny) = (f.nx, f.ny);
     let h = ny as f64;
     let nu = u.nu_lattice;
@@ -67,7 +79,7 @@ pub fn couette(inp: &Inputs, r: &mut Results) -> Result<(), AnalysisError> {
     };
     let u = &inp.scene.units;
     let (us, un) = (u.velocity_to_lattice(us), u.velocity_to_lattice(un));
-    let f = inp.fields;
+    let f = fields(inp, "couette")?;
     let (mut num, mut den) = (0.0, 0.0);
     for y in 0..f.ny {
         let exact = us + (un - us) * (y as f64 + 0.5) / f.ny as f64;
@@ -115,7 +127,7 @@ pub fn taylor_green(inp: &Inputs, r: &mut Results) -> Result<(), AnalysisError> 
         ));
     };
     let u = &inp.scene.units;
-    let f = inp.fields;
+    let f = fields(inp, "taylor-green")?;
     let u0 = u.velocity_to_lattice(amplitude_m_s);
     let (mut num, mut den) = (0.0, 0.0);
     for y in 0..f.ny {
@@ -206,7 +218,7 @@ pub fn ghia(
     };
     let units = &inp.scene.units;
     let lid = units.velocity_to_lattice(velocity_m_s[0]);
-    let f = inp.fields;
+    let f = fields(inp, "ghia")?;
     let (nx, ny) = (f.nx, f.ny);
     // Centrelines at x = L/2 and y = L/2 (averaging the two straddling cells for even sizes).
     let line = |n: usize, at: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..n).map(at).collect() };

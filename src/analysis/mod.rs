@@ -7,7 +7,9 @@ pub mod checks;
 pub mod collapse;
 pub mod flows;
 pub mod sedimentation;
+mod share;
 mod signals;
+pub use share::share_from_root;
 
 use crate::io::probes::Series;
 use crate::lbm::fields::{Fields, Totals};
@@ -25,7 +27,7 @@ pub type GrainDisks = Vec<[f64; 3]>;
 pub type MomentumPair = [[f64; 2]; 2];
 
 /// An analysis that could not be computed.
-#[derive(Debug, Error)]
+#[derive(Debug, Clone, Error)]
 #[error("analysis `{analysis}`: {message}")]
 pub struct AnalysisError {
     /// Which analysis.
@@ -38,8 +40,9 @@ pub struct AnalysisError {
 pub struct Inputs<'a> {
     /// The scene.
     pub scene: &'a ValidScene,
-    /// Final fields, lattice units.
-    pub fields: &'a Fields,
+    /// Final fields of the whole lattice, lattice units: `Some` where the scene's analyses
+    /// read them ([`needs_fields`]; the run gathers them on rank 0 only), else `None`.
+    pub fields: Option<&'a Fields>,
     /// Steps taken.
     pub steps: u64,
     /// Probe series.
@@ -135,6 +138,20 @@ pub fn result_names(scene: &ValidScene) -> Vec<String> {
         }
     }
     names
+}
+
+/// Whether any of the scene's analyses reads the final fields (the reference flows); the
+/// others read probes, totals and grains, so a run gathers no lattice for them.
+pub fn needs_fields(scene: &ValidScene) -> bool {
+    scene.scene.analyses.iter().any(|a| {
+        matches!(
+            a,
+            Analysis::Poiseuille
+                | Analysis::Couette
+                | Analysis::TaylorGreen
+                | Analysis::Ghia { .. }
+        )
+    })
 }
 
 /// Run every analysis of the scene.
