@@ -522,7 +522,9 @@ fn run_typed<T: Real + hdf5::H5Type>(
             .then(|| sim.gather_fields_at_root(comm, fields))
             .flatten();
         let local = comm.is_root().then(|| {
-            analysis::run_all(&analysis::Inputs {
+            // A panic here would leave the other ranks waiting for the results: make it an
+            // error that they receive too.
+            let inputs = analysis::Inputs {
                 scene,
                 fields: global.as_ref(),
                 steps,
@@ -531,7 +533,9 @@ fn run_typed<T: Real + hdf5::H5Type>(
                 momentum: momentum_initial.zip(momentum_final),
                 grain_radius: grain_radius.clone(),
                 grains: grains_final.map(|f| (grains_initial.clone(), f)),
-            })
+            };
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| analysis::run_all(&inputs)))
+                .unwrap_or_else(|_| Err(analysis::panicked()))
         });
         analysis::share_from_root(comm, local)?
     } else if error.is_none() && !interrupted {

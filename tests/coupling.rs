@@ -263,32 +263,53 @@ fn bad_dkt_fall_windows_name_the_key() {
     let window = "fall_window_s = [7.0, 8.0]\n";
     let terminal = "terminal_velocity_m_s = 1.172e-2";
     assert!(base.contains(window) && base.contains(terminal));
-    let cases: Vec<(String, &str)> = vec![
+    let (w, t) = ("fall_window_s", "terminal_velocity_m_s");
+    let cases: Vec<(String, &str, &str)> = vec![
         (
             base.replace(window, "fall_window_s = [8.0, 7.0]\n"),
+            w,
             "fall_window_s must be [from, to] with 0 ≤ from < to",
         ),
         (
             base.replace(window, "fall_window_s = [7.0, 20.0]\n"),
-            "after the run ([run] end_time_s = 16)",
+            w,
+            "after the run (which ends at 16 s)",
+        ),
+        (
+            base.replace("end_time_s = 16.0", "steps = 1000"),
+            w,
+            "after the run (which ends at 0.2083",
         ),
         (
             base.replace(window, ""),
+            t,
             "terminal_velocity_m_s needs fall_window_s",
         ),
         (
             base.replace(terminal, "terminal_velocity_m_s = -1.0"),
+            t,
             "the terminal velocity must be a positive number",
         ),
     ];
-    for (text, needle) in cases {
+    for (text, key, needle) in cases {
         std::fs::write(&path, &text).unwrap();
         let msg = grainflow::scene::load_any(&path)
             .err()
             .map(|e| e.to_string())
             .unwrap_or_default();
         assert!(msg.contains(needle), "expected `{needle}`, got `{msg}`");
+        // The error names the key and its line.
+        let at = format!("scene.toml:{}: `{key}`", line_of(&text, key));
+        assert!(msg.contains(&at), "expected `{at}`, got `{msg}`");
     }
+}
+
+/// 1-based line of the first line of `text` that starts with `key`.
+fn line_of(text: &str, key: &str) -> usize {
+    1 + text
+        .lines()
+        .position(|l| l.trim_start().starts_with(key))
+        .unwrap_or_else(|| panic!("no line starts with {key}"))
 }
 
 #[test]

@@ -40,8 +40,9 @@ pub trait Comm: Send + Sync {
     /// Every rank's `local` slice of bytes concatenated in rank order.
     fn all_gather_bytes(&self, local: &[u8]) -> Vec<u8>;
     /// Every rank's `local` slice concatenated in rank order on the root (rank 0), an empty
-    /// vector on the other ranks: for data only the root uses (pictures of the whole
-    /// lattice), which no other rank should have to hold. Collective.
+    /// vector on the other ranks: for data only the root uses (the whole lattice for
+    /// pictures and end-of-run analyses), which no other rank should have to hold.
+    /// Collective.
     fn gather_f64(&self, local: &[f64]) -> Vec<f64> {
         let all = self.all_gather_f64(local);
         if self.is_root() {

@@ -267,6 +267,15 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
     Ok(r)
 }
 
+/// The error an analysis that panicked becomes (the panic's message went to stderr), so that
+/// every rank of a distributed run stops with it.
+pub fn panicked() -> AnalysisError {
+    err(
+        "(all)",
+        "an analysis panicked (a bug: please report it with the scene); its message is above",
+    )
+}
+
 pub(crate) fn err(analysis: &str, message: impl Into<String>) -> AnalysisError {
     AnalysisError {
         analysis: analysis.into(),

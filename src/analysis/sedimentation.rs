@@ -111,7 +111,7 @@ pub struct DktSetup<'a> {
 /// - `leader_fall_m_s`, `trailer_fall_m_s`: with `fall_window_s`, each grain's fall speed
 ///   (velocity along gravity) averaged over the window, the leader being the grain further
 ///   along gravity at the window's end; NaN when the window is not wholly after the
-///   separation (or has no probe rows);
+///   separation, when the pair touches again within it, or when it has no probe rows;
 /// - `leader_fall_deviation`, `trailer_fall_deviation`: with `terminal_velocity_m_s` too,
 ///   fall speed / terminal velocity − 1 (the test: within 5 % after separation).
 pub fn draft_kiss_tumble(
@@ -167,7 +167,10 @@ pub fn draft_kiss_tumble(
         let rows: Vec<usize> = (0..n)
             .filter(|&i| a.times[i] >= from && a.times[i] <= to)
             .collect();
-        if let (Some(&last), true) = (rows.last(), from >= a.times[sep]) {
+        // The window must follow the separation, and a second kiss within it would swap the
+        // roles part-way: no meaningful average then.
+        let usable = |last: usize| from >= a.times[sep] && second_kiss.is_none_or(|k| k > last);
+        if let Some(&last) = rows.last().filter(|&&last| usable(last)) {
             let along = |s: &Series, i: usize, c: usize| {
                 col(s, i, c) * down[0] + col(s, i, c + 1) * down[1]
             };

@@ -7,7 +7,12 @@ use super::SceneError;
 
 /// Probes (unique names, inside the domain, naming what exists) and analyses (each with the
 /// probes and keys it needs).
-pub(super) fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
+/// `run_end_s` is the run's end time (s), for windows that must lie within the run.
+pub(super) fn validate_probes_and_analyses(
+    s: &Scene,
+    ctx: &Context,
+    run_end_s: f64,
+) -> Result<(), SceneError> {
     let lx = s.domain.cells[0] as f64 * s.domain.spacing_m;
     let ly = s.domain.cells[1] as f64 * s.domain.spacing_m;
     for (n, p) in s.probes.iter().enumerate() {
@@ -134,7 +139,7 @@ pub(super) fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(
                     *average_last_s,
                     "the averaging window",
                 )?;
-                fall_window(s, ctx, *fall_window_s, *terminal_velocity_m_s)?;
+                fall_window(run_end_s, ctx, *fall_window_s, *terminal_velocity_m_s)?;
             }
             Analysis::ColumnCollapse {
                 deposit,
@@ -196,11 +201,10 @@ pub(super) fn validate_probes_and_analyses(s: &Scene, ctx: &Context) -> Result<(
     validate_checks(&s.checks, ctx)
 }
 
-/// Each check gives expected with one tolerance, or max and/or min.
-/// The draft-kiss-tumble fall-speed window: 0 ≤ from < to, within the run when it is set
-/// by `end_time_s`; a terminal velocity needs a window and must be positive.
+/// The draft-kiss-tumble fall-speed window: 0 ≤ from < to ≤ the run's end (`run_end_s`);
+/// a terminal velocity needs a window and must be positive.
 fn fall_window(
-    s: &Scene,
+    run_end_s: f64,
     ctx: &Context,
     window: Option<[f64; 2]>,
     terminal: Option<f64>,
@@ -215,11 +219,11 @@ fn fall_window(
                 ),
             ));
         }
-        if let Some(end) = s.run.end_time_s.filter(|&end| to > end) {
+        if to > run_end_s {
             return Err(ctx.err(
                 "fall_window_s",
                 0,
-                format!("fall_window_s ends at {to} s, after the run ([run] end_time_s = {end}): shorten the window or run longer"),
+                format!("fall_window_s ends at {to} s, after the run (which ends at {run_end_s} s): shorten the window or run longer"),
             ));
         }
     }

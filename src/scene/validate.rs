@@ -194,7 +194,12 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
     validate_boundaries(s, ctx)?;
     validate_obstacles(s, ctx)?;
     validate_run(s, ctx, &units)?;
-    super::probes_check::validate_probes_and_analyses(s, ctx)?;
+    // The run's end (s): as given, or its steps times the derived time step.
+    let run_end_s = s
+        .run
+        .end_time_s
+        .unwrap_or(s.run.steps.unwrap_or(0) as f64 * units.dt_s);
+    super::probes_check::validate_probes_and_analyses(s, ctx, run_end_s)?;
     warnings.extend(super::coupling::validate(s, &units, ctx)?);
     Ok((units, warnings))
 }
@@ -382,6 +387,7 @@ fn validate_run(s: &Scene, ctx: &Context, units: &Units) -> Result<(), SceneErro
     Ok(())
 }
 
+/// Each check gives expected with one tolerance, or max and/or min.
 pub(crate) fn validate_checks(checks: &[Check], ctx: &Context) -> Result<(), SceneError> {
     for (n, c) in checks.iter().enumerate() {
         let forms = [c.expected.is_some(), c.max.is_some() || c.min.is_some()];
