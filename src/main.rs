@@ -15,7 +15,11 @@ fn main() {
     match real_main() {
         Ok(code) => std::process::exit(code),
         Err(e) => {
-            eprintln!("error: {e:#}");
+            // One write of the whole line: under mpirun, ranks that fail together then never
+            // interleave inside each other's message (a write under 4 KiB to a pipe is atomic).
+            use std::io::Write;
+            let line = format!("error: {e:#}\n");
+            let _ = std::io::stderr().write_all(line.as_bytes());
             std::process::exit(1);
         }
     }

@@ -326,7 +326,8 @@ fn failing_analysis_on_2_ranks_stops_every_rank_with_its_message() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(
-        err.matches("analysis `couette`: needs walls").count(),
+        err.matches("error: analysis `couette`: needs walls")
+            .count(),
         2,
         "both ranks report rank 0's error: {err}"
     );
