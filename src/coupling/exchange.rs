@@ -18,7 +18,7 @@
 //! what makes fluid + grain momentum conserved to round-off (tested).
 
 use super::cover_update::{Change, CoverUpdate};
-use super::map::{cover, for_owned, set_cells, GrainView, Share, SlabFrame, NONE};
+use super::map::{cover, for_owned, set_cells, GrainView, SlabFrame, NONE};
 use super::sums::ColumnSums;
 use super::{Refill, Scheme};
 use crate::lbm::moving::{LinkPlan, MovingCells, PsmPlan};
@@ -89,8 +89,10 @@ pub struct Coupler {
     pub(super) part_counts: Vec<u32>,
     /// Each grain's boundary cells, kept between remaps (`boundary_lists.rs`).
     pub(super) lists: super::boundary_lists::BoundaryLists,
-    /// Solid fractions (partially saturated method) by row, then (once planned) by cell.
-    pub(super) sorted: Vec<Share>,
+    /// Solid fractions (partially saturated method) by row, each row sorted by cell.
+    pub(super) share_rows: Vec<super::psm::ShareRow>,
+    /// The grain image (index into `disk_images`) of each share of the PSM plan.
+    pub(super) share_images: Vec<u32>,
     /// The grain images that reach the slab (grain, image centre), with the line tables of
     /// their exact cell areas (`geometry::CellAreas`: image i's vertical lines are
     /// `column_lines[column_start[i]..column_start[i + 1]]`, its horizontal lines likewise).
@@ -119,7 +121,7 @@ pub struct Coupler {
     pub(super) link_momentum: Vec<f64>,
     pub(super) share_momentum: Vec<[f64; 2]>,
     pub(super) rest: Vec<[f64; 2]>,
-    /// PSM: where each row's shares start in `sorted` (kept from the map to the plan).
+    /// PSM: where each row's shares start in the plan (scratch of the plan).
     pub(super) offsets: Vec<u32>,
     /// Cells changing hands in the last remap, and their refills and momenta.
     pub(super) refills: Vec<crate::lbm::moving::Refill>,
@@ -162,7 +164,8 @@ impl Coupler {
             part_grains: Vec::new(),
             part_counts: Vec::new(),
             lists: Default::default(),
-            sorted: Vec::new(),
+            share_rows: Vec::new(),
+            share_images: Vec::new(),
             disk_images: Vec::new(),
             column_start: Vec::new(),
             column_lines: Vec::new(),
@@ -279,7 +282,7 @@ impl Coupler {
         out.fill(0.0);
         match self.scheme {
             Scheme::Psm => {
-                for s in &self.sorted {
+                for s in self.share_rows.iter().flat_map(|r| &r.shares) {
                     let e = &mut out[s.cell as usize];
                     *e = (*e + s.fraction).min(1.0);
                 }

@@ -289,8 +289,8 @@ pub struct Share {
 
 /// Visit the shares in row `y` of grain image `image` (of `grain`, centred at `c`): every interior
 /// plain-fluid cell of that row it overlaps, in increasing x, with its exact solid fraction
-/// taken from `exact` (the image's [`CellAreas`]; `None` gives 0: the counting pass of a
-/// parallel build). Cells wholly inside or outside skip the exact area. `rank` is left 0.
+/// taken from `exact` (the image's [`CellAreas`]). Cells wholly inside or outside skip the
+/// exact area. `rank` is left 0.
 #[allow(clippy::too_many_arguments)]
 pub fn shares_in_row(
     frame: &SlabFrame,
@@ -299,7 +299,7 @@ pub fn shares_in_row(
     image: u32,
     c: [f64; 2],
     y: i64,
-    exact: Option<&CellAreas<'_>>,
+    exact: &CellAreas<'_>,
     mut visit: impl FnMut(Share),
 ) {
     let r = grain.radius;
@@ -319,16 +319,11 @@ pub fn shares_in_row(
         if nx_ * nx_ + ny_ * ny_ >= r * r {
             continue;
         }
-        let fraction = match exact {
-            None => 0.0,
-            Some(areas) => {
-                let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
-                if fx_ * fx_ + fy_ * fy_ <= r * r {
-                    1.0
-                } else {
-                    areas.fraction(x + x0, y)
-                }
-            }
+        let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
+        let fraction = if fx_ * fx_ + fy_ * fy_ <= r * r {
+            1.0
+        } else {
+            exact.fraction(x + x0, y)
         };
         visit(Share {
             fraction,

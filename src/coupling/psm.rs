@@ -10,13 +10,23 @@ use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
 use rayon::prelude::*;
 
+/// One row's partially saturated shares, kept from the map to the plan (and read by
+/// [`Coupler::solid_fraction`] in between).
+#[derive(Debug, Clone, Default)]
+pub struct ShareRow {
+    /// The row's shares, sorted by cell, a cell's shares in grain order.
+    pub(super) shares: Vec<Share>,
+    /// How many distinct cells they cover.
+    pub(super) cells: u32,
+}
+
 impl Coupler {
     /// The solid fraction of every interior fluid cell each grain overlaps, row by row
     /// (in parallel over the rows), each row's grains in id order, each grain's images in
-    /// turn, cells in increasing x: the grain-by-grain list, grouped by row. Fills `sorted`
-    /// (each share's `rank` is its place in its row) and `offsets` (where each row starts).
-    /// The exact areas come from per-image tables of the grid lines around each disk
-    /// (built in parallel first), so a cell costs no square root or arcsine.
+    /// turn, cells in increasing x; then each row sorted by cell (a cell's shares keep that
+    /// grain order: each share's `rank` is its place in its row as mapped). Fills
+    /// `share_rows`. The exact areas come from per-image tables of the grid lines around
+    /// each disk (built in parallel first), so a cell costs no square root or arcsine.
     pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let fluid = |k: usize| lat.is_fluid_at(k);
@@ -93,114 +103,87 @@ impl Coupler {
                 .iter()
                 .map(|&i| images[i as usize].0 as usize)
         };
-        gather(
-            f.ny,
-            &mut self.offsets,
-            &mut self.sorted,
-            |y| {
-                let mut n = 0;
-                for i in in_row(y) {
-                    let (g, c) = (disks[i].0 as usize, disks[i].1);
-                    shares_in_row(&f, &fluid, &views[g], i as u32, c, y as i64, None, |_| {
-                        n += 1
-                    });
-                }
-                n
-            },
-            |y, out| {
-                let mut at = 0;
+        // One pass per row, its shares still in cache when sorted and counted.
+        self.share_rows.resize_with(f.ny, ShareRow::default);
+        self.share_rows
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(16)
+            .for_each(|(y, row)| {
+                let out = &mut row.shares;
+                out.clear();
                 for i in in_row(y) {
                     let (g, c) = (disks[i].0 as usize, disks[i].1);
                     let exact = areas(i);
-                    shares_in_row(
-                        &f,
-                        &fluid,
-                        &views[g],
-                        i as u32,
-                        c,
-                        y as i64,
-                        Some(&exact),
-                        |s| {
-                            // Keep the grain order among shares of one cell: tag with the
-                            // share's place in the row.
-                            out[at] = Share {
-                                rank: at as u32,
-                                ..s
-                            };
-                            at += 1;
-                        },
-                    );
+                    shares_in_row(&f, &fluid, &views[g], i as u32, c, y as i64, &exact, |s| {
+                        // Keep the grain order among shares of one cell: tag with the
+                        // share's place in the row.
+                        let rank = out.len() as u32;
+                        out.push(Share { rank, ..s });
+                    });
                 }
-            },
-        );
+                out.sort_unstable_by_key(|sh| (sh.cell, sh.rank));
+                row.cells = out
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, sh)| j == 0 || out[j - 1].cell != sh.cell)
+                    .count() as u32;
+            });
     }
 
-    /// Group the shares by cell within each row (cells in increasing x, each cell's shares
-    /// in grain order), and plan the partially saturated collision. The order is the
-    /// restriction of a partition-independent one (rows, then global x).
+    /// Plan the partially saturated collision from the map's rows (cells in increasing x,
+    /// each cell's shares in grain order): the order is the restriction of a
+    /// partition-independent one (rows, then global x). Records each plan share's grain
+    /// image for the collect.
     pub(super) fn plan_psm<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let tau = lat.tau0();
         let plan = &mut self.psm;
-        let sorted = &mut self.sorted;
         let disks = &self.disk_images;
-        {
-            let offsets = &self.offsets;
-            let base = Shared(sorted.as_mut_ptr());
-            (0..f.ny).into_par_iter().with_min_len(16).for_each(|y| {
-                // SAFETY: rows are disjoint ranges of `sorted`, each taken by one task.
-                let r = unsafe { row_of(&base, offsets, y) };
-                r.sort_unstable_by_key(|sh| (sh.cell, sh.rank));
-            });
-        }
-        let shares = &*sorted;
-        let offsets = &self.offsets;
-        // Cells per row (a row's shares are sorted by cell), then where each row's cells
-        // start.
-        (0..f.ny)
-            .into_par_iter()
-            .with_min_len(16)
-            .map(|y| {
-                let row = &shares[offsets[y] as usize..offsets[y + 1] as usize];
-                row.iter()
-                    .enumerate()
-                    .filter(|&(j, sh)| j == 0 || row[j - 1].cell != sh.cell)
-                    .count() as u32
-            })
-            .collect_into_vec(&mut plan.rows);
-        let mut cells = 0u32;
-        for r in plan.rows.iter_mut() {
-            (*r, cells) = (cells, cells + *r);
+        let rows = &self.share_rows;
+        // Where each row's cells and shares start.
+        plan.rows.clear();
+        self.offsets.clear();
+        let (mut cells, mut shares) = (0u32, 0u32);
+        for r in rows {
+            plan.rows.push(cells);
+            self.offsets.push(shares);
+            cells += r.cells;
+            shares += r.shares.len() as u32;
         }
         plan.rows.push(cells);
-        let cells = cells as usize;
+        self.offsets.push(shares);
+        let (cells, shares) = (cells as usize, shares as usize);
         plan.cells.resize(cells, 0);
         plan.start.resize(cells + 1, 0);
-        plan.start[cells] = shares.len() as u32;
+        plan.start[cells] = shares as u32;
         plan.total.resize(cells, 0.0);
-        plan.shares.resize(shares.len(), SolidShare::default());
+        plan.shares.resize(shares, SolidShare::default());
+        self.share_images.resize(shares, 0);
         // Then each row's cells, their weights and their shares, in parallel over rows.
-        let rows = &plan.rows;
-        let (p_cells, p_start, p_total, p_shares) = (
+        let (cell_rows, offsets) = (&plan.rows, &self.offsets);
+        let (p_cells, p_start, p_total, p_shares, p_images) = (
             Shared(plan.cells.as_mut_ptr()),
             Shared(plan.start.as_mut_ptr()),
             Shared(plan.total.as_mut_ptr()),
             Shared(plan.shares.as_mut_ptr()),
+            Shared(self.share_images.as_mut_ptr()),
         );
         (0..f.ny).into_par_iter().with_min_len(16).for_each(|y| {
-            // SAFETY: row y's cells (`rows`) and shares (`offsets`) are disjoint ranges
-            // of the plan's vectors, each taken by one task; the vectors are not
+            // SAFETY: row y's cells (`cell_rows`) and shares (`offsets`) are disjoint
+            // ranges of the plan's vectors, each taken by one task; the vectors are not
             // otherwise touched during the pass.
-            let (cells, start, total, out) = unsafe {
+            let (cells, start, total, out, images) = unsafe {
                 (
-                    row_of(&p_cells, rows, y),
-                    row_of(&p_start, rows, y),
-                    row_of(&p_total, rows, y),
+                    row_of(&p_cells, cell_rows, y),
+                    row_of(&p_start, cell_rows, y),
+                    row_of(&p_total, cell_rows, y),
                     row_of(&p_shares, offsets, y),
+                    row_of(&p_images, offsets, y),
                 )
             };
             let first = offsets[y] as usize;
-            let row = &shares[first..offsets[y + 1] as usize];
+            let row = &rows[y].shares;
             let (mut c, mut j) = (0, 0);
             while j < row.len() {
                 let mut end = j + 1;
@@ -229,12 +212,12 @@ impl Coupler {
                         }
                         .surface_velocity(centre),
                     };
+                    images[j + s] = sh.image;
                 }
                 (cells[c], start[c], total[c]) = (row[j].cell, (first + j) as u32, b);
                 (c, j) = (c + 1, end);
             }
         });
-        // Plan share s is `sorted[s]`: its grain and image are read from there later.
     }
 
     /// Add each share's momentum (as the sweep reported it) to its grain's column sums, in
@@ -253,13 +236,13 @@ impl Coupler {
             let g = g as usize;
             self.sums.window(g, views[g].centre[0], image[0])
         }));
-        let (plan, sorted, momentum) = (&self.psm, &self.sorted, &self.share_momentum);
+        let (plan, images, momentum) = (&self.psm, &self.share_images, &self.share_momentum);
         let (disks, win) = (&self.disk_images, &windows);
         self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
             f.band_cells(&plan.rows, &plan.cells, &band, |c, col, centre| {
                 for s in plan.start[c] as usize..plan.start[c + 1] as usize {
-                    // Plan share s is sorted share s: its grain and the image it sees.
-                    let (i, p) = (sorted[s].image as usize, momentum[s]);
+                    // Plan share s: its grain and the image it sees.
+                    let (i, p) = (images[s] as usize, momentum[s]);
                     let image = disks[i].1;
                     let arm = [centre[0] - image[0], centre[1] - image[1]];
                     // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
@@ -271,7 +254,7 @@ impl Coupler {
         self.body_windows = windows;
         bad.map(|(c, rho)| {
             let s = self.psm.start[c] as usize;
-            let image = self.sorted[s].image as usize;
+            let image = self.share_images[s] as usize;
             (self.psm.cells[c] as usize, self.disk_images[image].0, rho)
         })
     }
