@@ -206,3 +206,108 @@ pub fn draft_kiss_tumble(
     r.insert("dkt.trailer_fall_deviation".into(), deviation(trailer));
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lbm::fields::Totals;
+
+    /// A grain probe series (x, y, vx, vy, ω, fx, fy) sampled at t = 0, 1, … s.
+    fn series(name: &str, rows: &[[f64; 4]]) -> Series {
+        Series {
+            name: name.into(),
+            columns: vec!["x", "y", "vx", "vy", "omega", "fx", "fy"],
+            steps: (0..rows.len() as u64).collect(),
+            times: (0..rows.len()).map(|i| i as f64).collect(),
+            values: rows
+                .iter()
+                .flat_map(|r| [r[0], r[1], r[2], r[3], 0.0, 0.0, 0.0])
+                .collect(),
+        }
+    }
+
+    /// The pair of `jobs/dkt/dkt.toml` (d = 2 mm, gravity −y) along a scripted path: the
+    /// upper grain drafts (t = 0–1), kisses (t = 2), tumbles past the lower one (t = 3),
+    /// separates (t = 4–5), and kisses again at t = 8 (its gap back to zero).
+    fn pair() -> (Series, Series) {
+        // Lower grain at x = 0.01 throughout; upper grain's (x, y); fall speeds −0.01, −0.02.
+        let upper_at = [
+            (0.010, 0.0700), // t 0: gap 8 mm
+            (0.010, 0.0650), // t 1: drafting
+            (0.010, 0.0610), // t 2: kiss (gap 0)
+            (0.012, 0.0575), // t 3: tumbled below
+            (0.014, 0.0560), // t 4: gap > d/2
+            (0.014, 0.0550), // t 5
+            (0.014, 0.0540), // t 6
+            (0.013, 0.0530), // t 7
+            (0.012, 0.0600), // t 8: touches again (gap 0)
+            (0.014, 0.0510), // t 9
+        ];
+        let lower_y = |t: usize| 0.060 - 0.0005 * t as f64;
+        let mut lower = Vec::new();
+        let mut upper = Vec::new();
+        for (t, &(x, y)) in upper_at.iter().enumerate() {
+            lower.push([0.010, lower_y(t), 0.0, -0.01]);
+            // At t = 8 the upper grain sits right beside the lower one: gap zero.
+            let (x, y) = if t == 8 { (0.012, lower_y(t)) } else { (x, y) };
+            upper.push([x, y, 0.0, -0.02]);
+        }
+        (series("lower", &lower), series("upper", &upper))
+    }
+
+    fn dkt(window: [f64; 2]) -> Results {
+        let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/jobs/dkt/dkt.toml"));
+        let text = std::fs::read_to_string(path).unwrap();
+        let scene = crate::scene::parse(&text, path).unwrap();
+        let (lower, upper) = pair();
+        let all = [lower, upper];
+        let inp = Inputs {
+            scene: &scene,
+            fields: None,
+            steps: 9,
+            series: &all,
+            totals: (Totals::default(), Totals::default()),
+            momentum: None,
+            grain_radius: vec![(0, 0.001), (1, 0.001)],
+            grains: None,
+        };
+        let setup = DktSetup {
+            lower: "lower",
+            upper: "upper",
+            contact_gap_m: 1.25e-4,
+            window_s: 1.0,
+            fall_window_s: Some(window),
+            terminal_velocity_m_s: Some(0.01),
+        };
+        let mut r = Results::new();
+        draft_kiss_tumble(&inp, &setup, &mut r).unwrap();
+        r
+    }
+
+    #[test]
+    fn fall_speeds_need_a_window_clear_of_the_second_kiss() {
+        // The scripted phases are found (times in units of √(d/g)).
+        let r = dkt([5.0, 7.0]);
+        let unit = (0.002f64 / 9.81).sqrt();
+        for (key, t) in [
+            ("dkt.kiss_time", 2.0),
+            ("dkt.tumble_time", 3.0),
+            ("dkt.separation_time", 4.0),
+            ("dkt.second_kiss_time", 8.0),
+        ] {
+            assert!((r[key] - t / unit).abs() < 1e-9, "{key}: {}", r[key]);
+        }
+        // Between the separation and the second kiss: both fall speeds, the leader (lower
+        // at t = 7: the upper grain) at 0.02 m/s along gravity.
+        assert!((r["dkt.leader_fall_m_s"] - 0.02).abs() < 1e-12);
+        assert!((r["dkt.trailer_fall_m_s"] - 0.01).abs() < 1e-12);
+        assert!((r["dkt.leader_fall_deviation"] - 1.0).abs() < 1e-9);
+        // A window that holds the second kiss, or starts before the separation: NaN.
+        for window in [[5.0, 8.0], [6.0, 9.0], [3.0, 6.0]] {
+            let r = dkt(window);
+            for key in ["dkt.leader_fall_m_s", "dkt.trailer_fall_m_s"] {
+                assert!(r[key].is_nan(), "{window:?}: {key} = {}", r[key]);
+            }
+        }
+    }
+}
