@@ -279,9 +279,6 @@ pub struct Share {
     pub fraction: f64,
     /// Padded cell index.
     pub cell: u32,
-    /// Its place in its row as mapped (keeps the grain order among a cell's shares when
-    /// the row is sorted by cell).
-    pub rank: u32,
     /// The grain image (its index in the map's list of images that reach the slab, each
     /// a grain and the centre the cell sees).
     pub image: u32,
@@ -290,7 +287,7 @@ pub struct Share {
 /// Visit the shares in row `y` of grain image `image` (of `grain`, centred at `c`): every interior
 /// plain-fluid cell of that row it overlaps, in increasing x, with its exact solid fraction
 /// taken from `exact` (the image's [`CellAreas`]). Cells wholly inside or outside skip the
-/// exact area. `rank` is left 0.
+/// exact area.
 #[allow(clippy::too_many_arguments)]
 pub fn shares_in_row(
     frame: &SlabFrame,
@@ -328,7 +325,6 @@ pub fn shares_in_row(
         visit(Share {
             fraction,
             cell: k as u32,
-            rank: 0,
             image,
         });
     }

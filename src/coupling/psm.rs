@@ -24,7 +24,8 @@ impl Coupler {
     /// The solid fraction of every interior fluid cell each grain overlaps, row by row
     /// (in parallel over the rows), each row's grains in id order, each grain's images in
     /// turn, cells in increasing x; then each row sorted by cell (a cell's shares keep that
-    /// grain order: each share's `rank` is its place in its row as mapped). Fills
+    /// grain order: a row's images come in increasing index, and the sort's key is
+    /// (cell, image)). Fills
     /// `share_rows`. The exact areas come from per-image tables of the grid lines around
     /// each disk (built in parallel first), so a cell costs no square root or arcsine.
     pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
@@ -116,13 +117,12 @@ impl Coupler {
                     let (g, c) = (disks[i].0 as usize, disks[i].1);
                     let exact = areas(i);
                     shares_in_row(&f, &fluid, &views[g], i as u32, c, y as i64, &exact, |s| {
-                        // Keep the grain order among shares of one cell: tag with the
-                        // share's place in the row.
-                        let rank = out.len() as u32;
-                        out.push(Share { rank, ..s });
+                        out.push(s)
                     });
                 }
-                out.sort_unstable_by_key(|sh| (sh.cell, sh.rank));
+                // The row's images come in increasing index (grain order): sorting by
+                // (cell, image) keeps that order among a cell's shares.
+                out.sort_unstable_by_key(|sh| (u64::from(sh.cell) << 32) | u64::from(sh.image));
                 row.cells = out
                     .iter()
                     .enumerate()
