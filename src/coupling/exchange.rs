@@ -91,8 +91,6 @@ pub struct Coupler {
     pub(super) lists: super::boundary_lists::BoundaryLists,
     /// Solid fractions (partially saturated method) by row, each row sorted by cell.
     pub(super) share_rows: Vec<super::psm::ShareRow>,
-    /// The grain image (index into `disk_images`) of each share of the PSM plan.
-    pub(super) share_images: Vec<u32>,
     /// The grain images that reach the slab (grain, image centre), with the line tables of
     /// their exact cell areas (`geometry::CellAreas`: image i's vertical lines are
     /// `column_lines[column_start[i]..column_start[i + 1]]`, its horizontal lines likewise).
@@ -165,7 +163,6 @@ impl Coupler {
             part_counts: Vec::new(),
             lists: Default::default(),
             share_rows: Vec::new(),
-            share_images: Vec::new(),
             disk_images: Vec::new(),
             column_start: Vec::new(),
             column_lines: Vec::new(),

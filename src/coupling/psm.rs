@@ -6,7 +6,7 @@ use super::exchange::{Coupler, Unstable};
 use super::gather::{gather, group_by_row, row_of, Shared};
 use super::geometry::{box_lines, column_line, row_line, CellAreas};
 use super::map::{share_rows, shares_in_row, GrainView, Share};
-use crate::lbm::moving::SolidShare;
+use crate::lbm::moving::{RigidMotion, SolidShare};
 use crate::lbm::{Lattice, Real};
 use rayon::prelude::*;
 
@@ -133,14 +133,24 @@ impl Coupler {
 
     /// Plan the partially saturated collision from the map's rows (cells in increasing x,
     /// each cell's shares in grain order): the order is the restriction of a
-    /// partition-independent one (rows, then global x). Records each plan share's grain
-    /// image for the collect.
+    /// partition-independent one (rows, then global x). Each share's body is its grain
+    /// image, whose rigid motion the sweep takes the solid's velocity from.
     pub(super) fn plan_psm<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let tau = lat.tau0();
         let plan = &mut self.psm;
         let disks = &self.disk_images;
         let rows = &self.share_rows;
+        plan.x0 = f.x0 as i64;
+        plan.bodies.clear();
+        plan.bodies.extend(disks.iter().map(|&(g, centre)| {
+            let v = &views[g as usize];
+            RigidMotion {
+                velocity: v.velocity,
+                omega: v.omega,
+                centre,
+            }
+        }));
         // Where each row's cells and shares start.
         plan.rows.clear();
         self.offsets.clear();
@@ -159,27 +169,24 @@ impl Coupler {
         plan.start[cells] = shares as u32;
         plan.total.resize(cells, 0.0);
         plan.shares.resize(shares, SolidShare::default());
-        self.share_images.resize(shares, 0);
         // Then each row's cells, their weights and their shares, in parallel over rows.
         let (cell_rows, offsets) = (&plan.rows, &self.offsets);
-        let (p_cells, p_start, p_total, p_shares, p_images) = (
+        let (p_cells, p_start, p_total, p_shares) = (
             Shared(plan.cells.as_mut_ptr()),
             Shared(plan.start.as_mut_ptr()),
             Shared(plan.total.as_mut_ptr()),
             Shared(plan.shares.as_mut_ptr()),
-            Shared(self.share_images.as_mut_ptr()),
         );
         (0..f.ny).into_par_iter().with_min_len(16).for_each(|y| {
             // SAFETY: row y's cells (`cell_rows`) and shares (`offsets`) are disjoint
             // ranges of the plan's vectors, each taken by one task; the vectors are not
             // otherwise touched during the pass.
-            let (cells, start, total, out, images) = unsafe {
+            let (cells, start, total, out) = unsafe {
                 (
                     row_of(&p_cells, cell_rows, y),
                     row_of(&p_start, cell_rows, y),
                     row_of(&p_total, cell_rows, y),
                     row_of(&p_shares, offsets, y),
-                    row_of(&p_images, offsets, y),
                 )
             };
             let first = offsets[y] as usize;
@@ -195,10 +202,7 @@ impl Coupler {
                 let e = eps.min(1.0);
                 // Noble & Torczynski 1998, eq. 9: B = ε(τ − ½) / ((1 − ε) + (τ − ½)).
                 let b = e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5));
-                let centre = f.centre_in_row(row[j].cell as usize, y);
                 for (s, sh) in group.iter().enumerate() {
-                    let (g, image) = disks[sh.image as usize];
-                    let grain = &views[g as usize];
                     out[j + s] = SolidShare {
                         // A cell whose overlap rounds to nothing stays plain fluid.
                         b: if eps > 0.0 {
@@ -206,13 +210,8 @@ impl Coupler {
                         } else {
                             0.0
                         },
-                        velocity: GrainView {
-                            centre: image,
-                            ..*grain
-                        }
-                        .surface_velocity(centre),
+                        body: sh.image,
                     };
-                    images[j + s] = sh.image;
                 }
                 (cells[c], start[c], total[c]) = (row[j].cell, (first + j) as u32, b);
                 (c, j) = (c + 1, end);
@@ -236,13 +235,13 @@ impl Coupler {
             let g = g as usize;
             self.sums.window(g, views[g].centre[0], image[0])
         }));
-        let (plan, images, momentum) = (&self.psm, &self.share_images, &self.share_momentum);
+        let (plan, momentum) = (&self.psm, &self.share_momentum);
         let (disks, win) = (&self.disk_images, &windows);
         self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
             f.band_cells(&plan.rows, &plan.cells, &band, |c, col, centre| {
                 for s in plan.start[c] as usize..plan.start[c + 1] as usize {
                     // Plan share s: its grain and the image it sees.
-                    let (i, p) = (images[s] as usize, momentum[s]);
+                    let (i, p) = (plan.shares[s].body as usize, momentum[s]);
                     let image = disks[i].1;
                     let arm = [centre[0] - image[0], centre[1] - image[1]];
                     // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
@@ -254,7 +253,7 @@ impl Coupler {
         self.body_windows = windows;
         bad.map(|(c, rho)| {
             let s = self.psm.start[c] as usize;
-            let image = self.share_images[s] as usize;
+            let image = self.psm.shares[s].body as usize;
             (self.psm.cells[c] as usize, self.disk_images[image].0, rho)
         })
     }

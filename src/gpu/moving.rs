@@ -228,8 +228,23 @@ impl<T: Real> GpuFluid<T> {
                 let mut real = Vec::with_capacity(n + 5 * s);
                 real.extend(plan.total.iter().map(|&b| T::from_f64(b)));
                 real.extend(plan.shares.iter().map(|v| T::from_f64(v.b)));
-                real.extend(plan.shares.iter().map(|v| T::from_f64(v.velocity[0])));
-                real.extend(plan.shares.iter().map(|v| T::from_f64(v.velocity[1])));
+                // The solids' velocities at the cell centres, share by share.
+                let stride = self.host_mut().stride;
+                let (mut ux, mut uy) = (Vec::with_capacity(s), Vec::with_capacity(s));
+                for y in 0..plan.rows.len().saturating_sub(1) {
+                    for n in plan.rows[y] as usize..plan.rows[y + 1] as usize {
+                        let k = plan.cells[n] as usize;
+                        for &share in
+                            &plan.shares[plan.start[n] as usize..plan.start[n + 1] as usize]
+                        {
+                            let u = plan.velocity(stride, k, y, share);
+                            ux.push(T::from_f64(u[0]));
+                            uy.push(T::from_f64(u[1]));
+                        }
+                    }
+                }
+                real.extend(ux);
+                real.extend(uy);
                 real.extend(std::iter::repeat_n(T::default(), 2 * s));
                 self.run_moving(Kernel::Psm, prev, n, &idx, &real);
                 mom.clear();

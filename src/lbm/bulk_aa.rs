@@ -283,7 +283,7 @@ pub(crate) unsafe fn sweep_run<T: Real, C: Collider<T>>(
 mod tests {
     use super::super::collision::Collision;
     use super::super::lattice::{FaceCondition, Lattice, LatticeSetup, SolidInfo, FLUID};
-    use super::super::moving::{MovingCells, PsmPlan, SolidShare};
+    use super::super::moving::{MovingCells, PsmPlan, RigidMotion, SolidShare};
     use super::*;
     use decomposition::SingleProcess;
 
@@ -353,10 +353,15 @@ mod tests {
                 let two = y % 3 == 0 && n % 5 == 0;
                 let parts: &[f64] = if two { &[0.6, 0.4] } else { &[1.0] };
                 for (s, part) in parts.iter().enumerate() {
-                    let v = [0.01 * (x + s) as f64 - 0.1, 0.005 * y as f64 - 0.02];
+                    // A body per share, spinning about a point off the cell.
                     plan.shares.push(SolidShare {
                         b: b * part,
-                        velocity: v,
+                        body: plan.bodies.len() as u32,
+                    });
+                    plan.bodies.push(RigidMotion {
+                        velocity: [0.01 * (x + s) as f64 - 0.1, 0.005 * y as f64 - 0.02],
+                        omega: 0.002 * (s as f64 - 0.5),
+                        centre: [x as f64 - 3.0, y as f64 + 2.5],
                     });
                 }
                 plan.total.push(b);

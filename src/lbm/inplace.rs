@@ -203,7 +203,7 @@ impl<T: Real> Lattice<T> {
     fn sweep_aa<C: Collider<T>>(&mut self, c: &C, inner: bool, moving: Option<&MovingRun<'_>>) {
         let acc = self.access();
         let base = Shared(self.buf[0].as_mut_ptr());
-        let partial = moving.and_then(|r| r.partial_sweep());
+        let partial = moving.and_then(|r| r.partial_sweep(self.stride));
         let ns = self.forces.solids();
         let mut slot_values = std::mem::take(&mut self.forces.values);
         let slots = Shared(slot_values.as_mut_ptr());

@@ -305,10 +305,11 @@ impl<'a> MovingRun<'a> {
         matches!(self.kind, RunKind::Links(..))
     }
 
-    /// The partially saturated cells, for a sweep that computes them itself.
-    pub(crate) fn partial_sweep(&self) -> Option<PartialSweep<'_>> {
+    /// The partially saturated cells, for a sweep that computes them itself in a lattice
+    /// of row stride `stride`.
+    pub(crate) fn partial_sweep(&self, stride: usize) -> Option<PartialSweep<'_>> {
         match &self.kind {
-            RunKind::Partial(plan, mom) => Some(PartialSweep::new(plan, *mom, &self.bad)),
+            RunKind::Partial(plan, mom) => Some(PartialSweep::new(plan, stride, *mom, &self.bad)),
             RunKind::Links(..) => None,
         }
     }

@@ -31,20 +31,22 @@ pub(crate) unsafe fn partial_cell<T: Real, C: Collider<T>>(
     let h = pull(lat, src, acc, plan.cells[n] as usize);
     let mut post = h;
     let m = c.collide(&mut post);
-    blend_partial(plan, mom, n, &h, &post, &m)
+    blend_partial(plan, lat.stride, mom, n, &h, &post, &m)
 }
 
 /// The new values of partially saturated plan cell `n` from its pre-collision populations
 /// `h`, their fluid collision `post` and the pre-collision moments `m`, and whether its
 /// density stayed positive (Noble & Torczynski 1998, eqs. 8–9; seed eqs. 5.53–5.54):
 /// f_i ← (1 − B) post_i + Σ_s B_s (h_i + Ω^s_i), in the lattice's precision like the
-/// collision itself. Each share's momentum goes to `mom`.
+/// collision itself. Each share's momentum goes to `mom`. `stride` is the lattice's row
+/// stride (the solids' velocities are taken at the cell centre).
 ///
 /// # Safety
 /// The momentum slots of cell `n`'s shares belong to the caller.
 #[inline]
 pub(crate) unsafe fn blend_partial<T: Real>(
     plan: &PsmPlan,
+    stride: usize,
     mom: Disjoint<[f64; 2]>,
     n: usize,
     h: &[T; Q],
@@ -54,11 +56,13 @@ pub(crate) unsafe fn blend_partial<T: Real>(
     let eq_fluid = equilibrium(m);
     let mut new = fluid_part(post, T::from_f64(plan.total[n]));
     let first = plan.start[n] as usize;
-    for (s, share) in plan.shares[first..plan.start[n + 1] as usize]
+    let k = plan.cells[n] as usize;
+    let y = PsmPlan::row_of(stride, k);
+    for (s, &share) in plan.shares[first..plan.start[n + 1] as usize]
         .iter()
         .enumerate()
     {
-        let u = share.velocity.map(T::from_f64);
+        let u = plan.velocity(stride, k, y, share).map(T::from_f64);
         let p = add_share(&mut new, h, &eq_fluid, m, T::from_f64(share.b), u);
         mom.write(first + s, [-p[0].to_f64(), -p[1].to_f64()]);
     }
@@ -120,15 +124,26 @@ pub(crate) fn density_ok<T: Real>(new: &[T; Q]) -> bool {
 /// momenta go, and where the first bad cell is recorded.
 pub(crate) struct PartialSweep<'a> {
     plan: &'a PsmPlan,
+    stride: usize,
     mom: Disjoint<[f64; 2]>,
     bad: &'a AtomicUsize,
 }
 
 impl<'a> PartialSweep<'a> {
-    /// The cells of `plan`, their shares' momenta going to `mom`, the first bad one to
-    /// `bad`.
-    pub(crate) fn new(plan: &'a PsmPlan, mom: Disjoint<[f64; 2]>, bad: &'a AtomicUsize) -> Self {
-        Self { plan, mom, bad }
+    /// The cells of `plan` in a lattice of row stride `stride`, their shares' momenta going
+    /// to `mom`, the first bad one to `bad`.
+    pub(crate) fn new(
+        plan: &'a PsmPlan,
+        stride: usize,
+        mom: Disjoint<[f64; 2]>,
+        bad: &'a AtomicUsize,
+    ) -> Self {
+        Self {
+            plan,
+            stride,
+            mom,
+            bad,
+        }
     }
 
     /// Plan indices of local row `y`'s cells, in increasing padded index.
@@ -177,6 +192,8 @@ impl<'a> PartialSweep<'a> {
     ) {
         let plan = self.plan;
         let lane = |n: usize| plan.cells[n] as usize - k;
+        // A chunk lies in one row.
+        let y = PsmPlan::row_of(self.stride, k);
         // The lanes that hold no plan cell get weight 0 and are not written back.
         let zero = T::default();
         let (mut b_total, mut b, mut ux, mut uy) = ([zero; L], [zero; L], [zero; L], [zero; L]);
@@ -188,10 +205,11 @@ impl<'a> PartialSweep<'a> {
                 break;
             }
             let (l, share) = (lane(n), plan.shares[at]);
+            let u = plan.velocity(self.stride, plan.cells[n] as usize, y, share);
             b_total[l] = T::from_f64(plan.total[n]);
             b[l] = T::from_f64(share.b);
-            ux[l] = T::from_f64(share.velocity[0]);
-            uy[l] = T::from_f64(share.velocity[1]);
+            ux[l] = T::from_f64(u[0]);
+            uy[l] = T::from_f64(u[1]);
         }
         if !single {
             for n in cells {
@@ -246,7 +264,7 @@ impl<'a> PartialSweep<'a> {
         post: &mut [T; Q],
         m: &Moments<T>,
     ) {
-        let (new, ok) = blend_partial(self.plan, self.mom, n, h, post, m);
+        let (new, ok) = blend_partial(self.plan, self.stride, self.mom, n, h, post, m);
         *post = new;
         if !ok {
             self.bad.fetch_min(n, Ordering::Relaxed);

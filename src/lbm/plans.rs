@@ -138,12 +138,16 @@ impl LinkPlan {
 pub struct SolidShare {
     /// Its weight B_s in the collision (the cell's B split by solid fraction).
     pub b: f64,
-    /// Velocity of the solid at the cell centre (lattice units).
-    pub velocity: [f64; 2],
+    /// Index of the solid's rigid motion in [`PsmPlan::bodies`].
+    pub body: u32,
 }
 
 /// Partially saturated cells with their solid shares, compressed and grouped by row like
 /// [`LinkPlan`].
+///
+/// The solid's velocity at a cell is computed by the executing sweep from its body's rigid
+/// motion at the cell centre ([`PsmPlan::velocity`]), so the plan holds sixteen bytes per
+/// share.
 #[derive(Debug, Clone, Default)]
 pub struct PsmPlan {
     /// Offsets of each row's cells (ny + 1 values; empty for an empty plan).
@@ -157,6 +161,10 @@ pub struct PsmPlan {
     pub total: Vec<f64>,
     /// The shares, cell by cell.
     pub shares: Vec<SolidShare>,
+    /// The rigid motions the shares refer to.
+    pub bodies: Vec<RigidMotion>,
+    /// Global x of local column 0 (a cell's centre is (x0 + x + ½, y + ½)).
+    pub x0: i64,
 }
 
 impl PsmPlan {
@@ -168,6 +176,28 @@ impl PsmPlan {
         self.start.push(0);
         self.total.clear();
         self.shares.clear();
+        self.bodies.clear();
+    }
+
+    /// Velocity (lattice units) of `share`'s body at the centre of the cell at padded index
+    /// `k` in local row `y` of a lattice with row stride `stride`: u + ω × (p − c) (seed
+    /// eq. 5.46).
+    #[inline]
+    pub fn velocity(&self, stride: usize, k: usize, y: usize, share: SolidShare) -> [f64; 2] {
+        let b = &self.bodies[share.body as usize];
+        let x = k as i64 - ((y + 1) * stride) as i64 - 1;
+        let p = [(x + self.x0) as f64 + 0.5, y as f64 + 0.5];
+        let r = [p[0] - b.centre[0], p[1] - b.centre[1]];
+        [
+            b.velocity[0] - b.omega * r[1],
+            b.velocity[1] + b.omega * r[0],
+        ]
+    }
+
+    /// Local row of padded cell `k` in a lattice with row stride `stride`.
+    #[inline]
+    pub fn row_of(stride: usize, k: usize) -> usize {
+        k / stride - 1
     }
 }
 
@@ -183,4 +213,41 @@ pub struct Refill {
     pub extrapolate: u8,
     /// Velocity of the surface at the cell (lattice units).
     pub velocity: [f64; 2],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A share's solid velocity is its body's u + ω × (p − c) at the centre p of its cell,
+    /// in global coordinates, for a slab that starts at global column x0.
+    #[test]
+    fn share_velocity_is_the_body_motion_at_the_cell_centre() {
+        let (stride, x0) = (12, 40);
+        let plan = PsmPlan {
+            bodies: vec![
+                RigidMotion::default(),
+                RigidMotion {
+                    velocity: [0.01, -0.02],
+                    omega: 0.003,
+                    centre: [45.25, 2.75],
+                },
+            ],
+            x0,
+            ..PsmPlan::default()
+        };
+        // Local cell (3, 4): padded index (4 + 1) · stride + 3 + 1, centre (43.5, 4.5).
+        let k = 5 * stride + 4;
+        assert_eq!(PsmPlan::row_of(stride, k), 4);
+        let share = SolidShare { b: 0.5, body: 1 };
+        let u = plan.velocity(stride, k, 4, share);
+        let r = [43.5 - 45.25, 4.5 - 2.75];
+        let want = [0.01 - 0.003 * r[1], -0.02 + 0.003 * r[0]];
+        assert_eq!(u, want);
+        // The other body stands still.
+        assert_eq!(
+            plan.velocity(stride, k, 4, SolidShare { body: 0, ..share }),
+            [0.0; 2]
+        );
+    }
 }
