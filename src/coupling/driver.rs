@@ -19,6 +19,7 @@ use crate::run::RunError;
 use crate::scene::coupling::grain_scene;
 use crate::scene::{Units, ValidScene};
 use decomposition::{Comm, SlabPartition};
+use rayon::prelude::*;
 
 mod report;
 mod repulsion;
@@ -388,18 +389,24 @@ impl LbmDem {
             }
             remote.sort_by_key(|r| (r.0, r.1));
         }
+        // Each owned grain's total on its own (in parallel over the grains): the same bits
+        // in any order.
         let owned = self.dem.system.owned();
+        let (view_of, ids, remote) = (&self.view_of, &self.ids, &remote);
         let mut totals = Vec::with_capacity(owned);
-        for i in 0..owned {
-            let v = self.view_of[i] as usize;
-            sums.partials(v, &mut self.partials);
-            let id = self.ids[v];
-            let from = remote.partition_point(|r| r.0 < id);
-            let to = remote.partition_point(|r| r.0 <= id);
-            self.partials
-                .extend(remote[from..to].iter().map(|r| (r.1, r.2)));
-            totals.push(total(&mut self.partials));
-        }
+        (0..owned)
+            .into_par_iter()
+            .with_min_len(256)
+            .map_init(Vec::new, |partials, i| {
+                let v = view_of[i] as usize;
+                sums.partials(v, partials);
+                let id = ids[v];
+                let from = remote.partition_point(|r| r.0 < id);
+                let to = remote.partition_point(|r| r.0 <= id);
+                partials.extend(remote[from..to].iter().map(|r| (r.1, r.2)));
+                total(partials)
+            })
+            .collect_into_vec(&mut totals);
         totals
     }
 
