@@ -389,24 +389,31 @@ impl LbmDem {
             }
             remote.sort_by_key(|r| (r.0, r.1));
         }
-        // Each owned grain's total on its own (in parallel over the grains): the same bits
-        // in any order.
+        // Each owned grain's total on its own: the same bits in any order. In parallel over
+        // the grains when there are threads to share it (on one thread a parallel region
+        // only adds the pool's wake-up).
         let owned = self.dem.system.owned();
         let (view_of, ids, remote) = (&self.view_of, &self.ids, &remote);
+        let grain_total = |partials: &mut Vec<(u32, Load)>, i: usize| {
+            let v = view_of[i] as usize;
+            sums.partials(v, partials);
+            let id = ids[v];
+            let from = remote.partition_point(|r| r.0 < id);
+            let to = remote.partition_point(|r| r.0 <= id);
+            partials.extend(remote[from..to].iter().map(|r| (r.1, r.2)));
+            total(partials)
+        };
         let mut totals = Vec::with_capacity(owned);
-        (0..owned)
-            .into_par_iter()
-            .with_min_len(256)
-            .map_init(Vec::new, |partials, i| {
-                let v = view_of[i] as usize;
-                sums.partials(v, partials);
-                let id = ids[v];
-                let from = remote.partition_point(|r| r.0 < id);
-                let to = remote.partition_point(|r| r.0 <= id);
-                partials.extend(remote[from..to].iter().map(|r| (r.1, r.2)));
-                total(partials)
-            })
-            .collect_into_vec(&mut totals);
+        if rayon::current_num_threads() > 1 {
+            (0..owned)
+                .into_par_iter()
+                .with_min_len(256)
+                .map_init(Vec::new, grain_total)
+                .collect_into_vec(&mut totals);
+        } else {
+            let partials = &mut self.partials;
+            totals.extend((0..owned).map(|i| grain_total(partials, i)));
+        }
         totals
     }
 
