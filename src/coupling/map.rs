@@ -270,9 +270,9 @@ pub fn nearest_image_at(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> (usize
     (at, best)
 }
 
-/// One grain's share of one cell for the partially saturated method (24 bytes: the map
-/// writes ~250 k of them per step on the seed's Table 5.3 case, and the plan and the
-/// collect read them back).
+/// One grain's share of one cell for the partially saturated method (16 bytes: the map
+/// writes ~250 k of them per step on the seed's Table 5.3 case, and the plan reads them
+/// back).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Share {
     /// Solid fraction ε of the cell covered by this grain (exact disk–square area).

@@ -232,10 +232,10 @@ impl<T: Real> GpuFluid<T> {
                 let stride = self.host_mut().stride;
                 let (mut ux, mut uy) = (Vec::with_capacity(s), Vec::with_capacity(s));
                 for y in 0..plan.rows.len().saturating_sub(1) {
-                    for n in plan.rows[y] as usize..plan.rows[y + 1] as usize {
-                        let k = plan.cells[n] as usize;
+                    for c in plan.rows[y] as usize..plan.rows[y + 1] as usize {
+                        let k = plan.cells[c] as usize;
                         for &share in
-                            &plan.shares[plan.start[n] as usize..plan.start[n + 1] as usize]
+                            &plan.shares[plan.start[c] as usize..plan.start[c + 1] as usize]
                         {
                             let u = plan.velocity(stride, k, y, share);
                             ux.push(T::from_f64(u[0]));
@@ -243,6 +243,7 @@ impl<T: Real> GpuFluid<T> {
                         }
                     }
                 }
+                assert_eq!(ux.len(), s, "the plan's rows must cover all its cells");
                 real.extend(ux);
                 real.extend(uy);
                 real.extend(std::iter::repeat_n(T::default(), 2 * s));

@@ -9,7 +9,8 @@
 //!   it: half-way (Ladd 1994) or interpolated (Bouzidi, Firdaouss & Lallemand 2001)
 //!   bounce-back with the moving-wall term.
 //! * [`PsmPlan`]: partially saturated cells (Noble & Torczynski 1998), each with its solid
-//!   shares (weight B_s and solid velocity).
+//!   shares (weight B_s and the rigid body whose velocity at the cell centre is the
+//!   solid's).
 //! * [`Refill`]: a cell a surface has just uncovered, rebuilt from its fluid neighbours.
 //! * rest fills (equilibrium at ρ = 1 and a given velocity) and cell momenta.
 
