@@ -7,7 +7,7 @@ use super::geometry::link_fraction;
 use super::map::{nearest_image_at, GrainView};
 use super::Scheme;
 use crate::lbm::d2q9::{CX, CY};
-use crate::lbm::moving::{MovingLink, RigidMotion};
+use crate::lbm::moving::MovingLink;
 use crate::lbm::{Lattice, Real};
 use rayon::prelude::*;
 
@@ -184,11 +184,7 @@ impl Coupler {
         let periodic = f.periodic_x || f.periodic_y;
         for (g, v) in views.iter().enumerate() {
             start.push(bodies.len() as u32);
-            let motion = |centre| RigidMotion {
-                velocity: v.velocity,
-                omega: v.omega,
-                centre,
-            };
+            let motion = |centre| v.motion(centre);
             let before = bodies.len();
             if periodic {
                 bodies.extend(f.images(v).map(motion));

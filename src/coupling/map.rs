@@ -3,6 +3,7 @@
 //! method).
 
 use super::geometry::{covers, CellAreas};
+use crate::lbm::moving::RigidMotion;
 
 /// No grain covers the cell.
 pub const NONE: u32 = u32::MAX;
@@ -22,15 +23,21 @@ pub struct GrainView {
 }
 
 impl GrainView {
+    /// The grain's rigid motion about `centre` (itself or one of its periodic images).
+    #[inline]
+    pub fn motion(&self, centre: [f64; 2]) -> RigidMotion {
+        RigidMotion {
+            velocity: self.velocity,
+            omega: self.omega,
+            centre,
+        }
+    }
+
     /// Velocity of the rigid body at point `p` (global lattice coordinates): v + ω × r
     /// (seed eq. 5.46).
     #[inline]
     pub fn surface_velocity(&self, p: [f64; 2]) -> [f64; 2] {
-        let r = [p[0] - self.centre[0], p[1] - self.centre[1]];
-        [
-            self.velocity[0] - self.omega * r[1],
-            self.velocity[1] + self.omega * r[0],
-        ]
+        self.motion(self.centre).velocity_at(p)
     }
 }
 

@@ -6,7 +6,7 @@ use super::exchange::{Coupler, Unstable};
 use super::gather::{gather, group_by_row, row_of, Shared};
 use super::geometry::{box_lines, column_line, row_line, CellAreas};
 use super::map::{share_rows, shares_in_row, GrainView, Share};
-use crate::lbm::moving::{RigidMotion, SolidShare};
+use crate::lbm::moving::SolidShare;
 use crate::lbm::{Lattice, Real};
 use rayon::prelude::*;
 
@@ -25,9 +25,9 @@ impl Coupler {
     /// (in parallel over the rows), each row's grains in id order, each grain's images in
     /// turn, cells in increasing x; then each row sorted by cell (a cell's shares keep that
     /// grain order: a row's images come in increasing index, and the sort's key is
-    /// (cell, image)). Fills
-    /// `share_rows`. The exact areas come from per-image tables of the grid lines around
-    /// each disk (built in parallel first), so a cell costs no square root or arcsine.
+    /// (cell, image)). Fills `share_rows`. The exact areas come from per-image tables of
+    /// the grid lines around each disk (built in parallel first), so a cell costs no square
+    /// root or arcsine.
     pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let fluid = |k: usize| lat.is_fluid_at(k);
@@ -143,14 +143,11 @@ impl Coupler {
         let rows = &self.share_rows;
         plan.x0 = f.x0 as i64;
         plan.bodies.clear();
-        plan.bodies.extend(disks.iter().map(|&(g, centre)| {
-            let v = &views[g as usize];
-            RigidMotion {
-                velocity: v.velocity,
-                omega: v.omega,
-                centre,
-            }
-        }));
+        plan.bodies.extend(
+            disks
+                .iter()
+                .map(|&(g, centre)| views[g as usize].motion(centre)),
+        );
         // Where each row's cells and shares start.
         plan.rows.clear();
         self.offsets.clear();

@@ -47,6 +47,27 @@ pub struct RigidMotion {
     pub centre: [f64; 2],
 }
 
+impl RigidMotion {
+    /// The body's velocity at point `p` (global lattice coordinates): u + ω × (p − c)
+    /// (seed eq. 5.46).
+    #[inline]
+    pub fn velocity_at(&self, p: [f64; 2]) -> [f64; 2] {
+        let r = [p[0] - self.centre[0], p[1] - self.centre[1]];
+        [
+            self.velocity[0] - self.omega * r[1],
+            self.velocity[1] + self.omega * r[0],
+        ]
+    }
+}
+
+/// Centre (global lattice coordinates) of the cell at padded index `k` in local row `y` of a
+/// slab with row stride `stride` whose local column 0 is global column `x0`.
+#[inline]
+fn cell_centre(stride: usize, x0: i64, k: usize, y: usize) -> [f64; 2] {
+    let x = k as i64 - ((y + 1) * stride) as i64 - 1;
+    [(x + x0) as f64 + 0.5, y as f64 + 0.5]
+}
+
 /// Fluid cells next to moving surfaces with their links, compressed by cell: the links of
 /// `cells[c]` are `links[start[c]..start[c + 1]]`. Cells are padded indices of interior
 /// plain-fluid cells, each at most once, grouped by row: row y's are
@@ -104,19 +125,10 @@ impl LinkPlan {
     #[inline]
     pub fn wall(&self, stride: usize, k: usize, y: usize, link: MovingLink) -> f64 {
         let i = link.dir();
-        let b = &self.bodies[link.body()];
-        let x = k as i64 - ((y + 1) * stride) as i64 - 1;
+        let centre = cell_centre(stride, self.x0, k, y);
         let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-        let mid = [
-            (x + self.x0) as f64 + 0.5 - 0.5 * cx,
-            y as f64 + 0.5 - 0.5 * cy,
-        ];
-        let r = [mid[0] - b.centre[0], mid[1] - b.centre[1]];
-        // Seed eq. 5.46: u_w = u + ω × r.
-        let u = [
-            b.velocity[0] - b.omega * r[1],
-            b.velocity[1] + b.omega * r[0],
-        ];
+        let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+        let u = self.bodies[link.body()].velocity_at(mid);
         6.0 * W[i] * (cx * u[0] + cy * u[1])
     }
 
@@ -184,14 +196,7 @@ impl PsmPlan {
     /// eq. 5.46).
     #[inline]
     pub fn velocity(&self, stride: usize, k: usize, y: usize, share: SolidShare) -> [f64; 2] {
-        let b = &self.bodies[share.body as usize];
-        let x = k as i64 - ((y + 1) * stride) as i64 - 1;
-        let p = [(x + self.x0) as f64 + 0.5, y as f64 + 0.5];
-        let r = [p[0] - b.centre[0], p[1] - b.centre[1]];
-        [
-            b.velocity[0] - b.omega * r[1],
-            b.velocity[1] + b.omega * r[0],
-        ]
+        self.bodies[share.body as usize].velocity_at(cell_centre(stride, self.x0, k, y))
     }
 
     /// Local row of padded cell `k` in a lattice with row stride `stride`.
