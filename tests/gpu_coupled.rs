@@ -126,3 +126,54 @@ fn coupled_gpu_step_matches_the_cpu_for_every_scheme() {
         }
     }
 }
+
+/// A coupled run that blows up on the device stops as it does on the CPU, naming the same
+/// step, cell and grain: the device reports its first bad plan cell with the momenta it
+/// reads back (f64, where both backends round alike).
+#[test]
+fn coupled_gpu_blow_up_names_the_cpus_step_cell_and_grain() {
+    let adapters = grainflow::gpu::list_adapters();
+    if !adapters.iter().any(|a| a.f64) {
+        eprintln!("SKIPPED: no GPU adapter with f64");
+        return;
+    }
+    use grainflow::run::Precision;
+    use grainflow::run::{run, RunOptions, Status};
+    for scheme in ["bounce-back", "psm"] {
+        // The first grain thrown at 1.5 lattice units a step.
+        let text = std::fs::read_to_string(root().join("tests/scenes/mpi_grains_box.toml"))
+            .unwrap()
+            .replace(
+                "scheme = \"bounce-back\"",
+                &format!("scheme = \"{scheme}\""),
+            )
+            .replace(
+                "radius_m = 0.005, velocity_m_s = [0.04, 0.0] }",
+                "radius_m = 0.005, velocity_m_s = [1.5, 0.0] }",
+            );
+        let path = root().join("tests/scenes/__gpu_blow_up.toml");
+        let scene = grainflow::scene::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"));
+        let error = |backend| {
+            let out = tempfile::tempdir().unwrap();
+            let opts = RunOptions {
+                out_dir: out.path().to_path_buf(),
+                precision: Some(Precision::F64),
+                steps: None,
+                progress: false,
+                restart: None,
+                backend: Some(backend),
+                gpu_storage: None,
+                kernel: Some(Kernel::TwoArray),
+            };
+            let s = run(&scene, &opts).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(s.status, Status::Unstable, "{scheme} on {backend:?}");
+            s.error.unwrap()
+        };
+        let (cpu, gpu) = (error(Backend::Cpu), error(Backend::Gpu));
+        eprintln!("{scheme}\n  cpu: {cpu}\n  gpu: {gpu}");
+        // "unstable at step S: cell (X, Y) next to grain G has density …".
+        let head = |e: &str| e.split(" has density").next().unwrap().to_string();
+        assert!(cpu.contains("next to grain"), "{cpu}");
+        assert_eq!(head(&cpu), head(&gpu), "{scheme}");
+    }
+}

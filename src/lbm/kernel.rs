@@ -95,13 +95,22 @@ impl<T: Real> Lattice<T> {
             self.unpack_halo();
             self.sweep_part(Part::Edge, run.as_ref());
         }
+        // A moving-surface cell that went bad is the coupling's to report (it names the
+        // surface), as in place.
+        let moving_bad = match &run {
+            Some(r) if comm.size() > 1 => comm.any(r.first_bad().is_some()),
+            Some(r) => r.first_bad().is_some(),
+            None => false,
+        };
         let bad_row = self.row_bad.iter().position(|&b| b != 0);
-        if comm.size() > 1 {
-            if comm.any(bad_row.is_some()) {
-                return Err(self.agree_on_instability(comm, bad_row));
+        if !moving_bad {
+            if comm.size() > 1 {
+                if comm.any(bad_row.is_some()) {
+                    return Err(self.agree_on_instability(comm, bad_row));
+                }
+            } else if let Some(y) = bad_row {
+                return Err(self.locate_instability(y));
             }
-        } else if let Some(y) = bad_row {
-            return Err(self.locate_instability(y));
         }
         self.step += 1;
         self.cur ^= 1;
