@@ -75,7 +75,7 @@ pub struct GpuFluid<T: Real> {
     prm_buf: wgpu::Buffer,
     aux_buf: wgpu::Buffer,
     pub(super) bad_buf: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    pub(super) readback: wgpu::Buffer,
     pub(super) list_layout: wgpu::BindGroupLayout,
     /// Layout of the lattice group (0).
     pub(super) lattice_layout: wgpu::BindGroupLayout,
@@ -93,6 +93,9 @@ pub struct GpuFluid<T: Real> {
     pending: Option<wgpu::CommandEncoder>,
     /// Kernels of moving surfaces (grains), made on first use.
     pub(super) moving: Option<super::moving::MovingDevice>,
+    /// The moving kernels' upload data of the last step (kept for their allocations).
+    pub(super) moving_idx: Vec<u32>,
+    pub(super) moving_real: Vec<T>,
     pending_steps: usize,
 }
 

@@ -8,11 +8,13 @@
 use super::buffers::{job_groups, round16, shader_source};
 use super::fluid::GpuFluid;
 use crate::lbm::d2q9::Q;
+use crate::lbm::moving::PsmPlan;
 use crate::lbm::moving::{
     equilibrium_at, momentum_of, refill_cell, refill_sources, MovingCells, Refill,
 };
 use crate::lbm::Real;
 use decomposition::Comm;
+use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// Pipelines and buffers of the moving-surface kernels (made on first use).
@@ -180,84 +182,132 @@ impl<T: Real> GpuFluid<T> {
         super::fluid::from_bytes(&bytes)
     }
 
-    /// The first bad plan cell of the last moving kernel, and reset the flag.
-    fn take_bad_cell(&mut self) -> Option<usize> {
-        let v = self.download(&self.bad_buf, 12, 4);
-        let c = u32::from_le_bytes(v[0..4].try_into().expect("4 bytes"));
+    /// `count` reals of the moving real buffer from `first`, and the first bad plan cell of
+    /// the kernel that wrote them (resetting the flag): one read-back, so one wait for the
+    /// device per step.
+    fn moving_reals_and_bad(&mut self, first: usize, count: usize) -> (Vec<T>, Option<usize>) {
+        let rbuf = &self
+            .moving
+            .as_ref()
+            .and_then(|m| m.buffers.as_ref())
+            .expect("a moving kernel ran")
+            .1;
+        let bytes = count * T::BYTES;
+        let at = bytes.div_ceil(4) * 4;
+        let (values, flag) = if at + 4 <= self.readback.size() as usize {
+            let mut enc = self.ctx.device.create_command_encoder(&Default::default());
+            if at > 0 {
+                enc.copy_buffer_to_buffer(
+                    rbuf,
+                    (first * T::BYTES) as u64,
+                    &self.readback,
+                    0,
+                    at as u64,
+                );
+            }
+            enc.copy_buffer_to_buffer(&self.bad_buf, 12, &self.readback, at as u64, 4);
+            self.ctx.queue.submit([enc.finish()]);
+            let data = self
+                .ctx
+                .read(&self.readback, (at + 4) as u64)
+                .unwrap_or_else(|e| panic!("{e}: the GPU device was lost"));
+            let flag = u32::from_le_bytes(data[at..at + 4].try_into().expect("4 bytes"));
+            (super::fluid::from_bytes(&data[..bytes]), flag)
+        } else {
+            let values = super::fluid::from_bytes(&self.download(rbuf, first * T::BYTES, bytes));
+            let v = self.download(&self.bad_buf, 12, 4);
+            (
+                values,
+                u32::from_le_bytes(v[0..4].try_into().expect("4 bytes")),
+            )
+        };
         self.ctx
             .queue
             .write_buffer(&self.bad_buf, 12, bytemuck::bytes_of(&u32::MAX));
-        (c != u32::MAX).then_some(c as usize)
+        (values, (flag != u32::MAX).then_some(flag as usize))
     }
 
     /// Recompute the cells of `moving` right after the sweep (the lattice group whose source
     /// is the buffer the sweep read). Returns the plan index and density of the first cell
-    /// that went bad.
+    /// that went bad. The upload is packed in parallel into buffers kept between steps.
     pub(crate) fn moving_cells(&mut self, moving: &mut MovingCells<'_>) -> Option<(usize, f64)> {
         let prev = self.host_mut().cur ^ 1;
+        let stride = self.host_mut().stride;
         self.ctx
             .queue
             .write_buffer(&self.bad_buf, 12, bytemuck::bytes_of(&u32::MAX));
-        let cells = match moving {
-            MovingCells::None => return None,
+        let (mut idx, mut real) = (
+            std::mem::take(&mut self.moving_idx),
+            std::mem::take(&mut self.moving_real),
+        );
+        idx.clear();
+        real.clear();
+        let bad = match moving {
+            MovingCells::None => None,
             MovingCells::Links(plan, mom) => {
                 let (n, l) = (plan.cells.len(), plan.links.len());
-                let mut idx = Vec::with_capacity(3 + 2 * n + l);
                 idx.extend_from_slice(&[n as u32, l as u32]);
                 idx.extend_from_slice(&plan.cells);
                 idx.extend_from_slice(&plan.start);
-                idx.extend(plan.links.iter().map(|k| k.dir() as u32));
-                let stride = self.host_mut().stride;
-                let mut real = Vec::with_capacity(3 * l);
-                real.extend((0..l).map(|j| T::from_f64(plan.q(j))));
-                real.extend(plan.walls(stride).map(T::from_f64));
-                real.extend(std::iter::repeat_n(T::default(), l));
+                idx.par_extend(plan.links.par_iter().map(|k| k.dir() as u32));
+                let plan = &**plan;
+                real.par_extend((0..l).into_par_iter().map(|j| T::from_f64(plan.q(j))));
+                // Each link's wall term, cell by cell (a cell's links are contiguous).
+                real.par_extend((0..n).into_par_iter().flat_map_iter(|c| {
+                    let k = plan.cells[c] as usize;
+                    let y = PsmPlan::row_of(stride, k);
+                    (plan.start[c] as usize..plan.start[c + 1] as usize)
+                        .map(move |j| T::from_f64(plan.wall(stride, k, y, plan.links[j])))
+                }));
+                real.resize(3 * l, T::default());
                 self.run_moving(Kernel::Links, prev, n, &idx, &real);
+                let (values, bad) = self.moving_reals_and_bad(2 * l, l);
                 mom.clear();
-                if l > 0 {
-                    mom.extend(self.moving_reals(2 * l, l).iter().map(|v| v.to_f64()));
-                }
-                plan.cells.clone()
+                mom.extend(values.iter().map(|v| v.to_f64()));
+                bad.map(|c| (c, plan.cells[c]))
             }
             MovingCells::Partial(plan, mom) => {
                 let (n, s) = (plan.cells.len(), plan.shares.len());
-                let mut idx = Vec::with_capacity(3 + 2 * n);
                 idx.extend_from_slice(&[n as u32, s as u32]);
                 idx.extend_from_slice(&plan.cells);
                 idx.extend_from_slice(&plan.start);
-                let mut real = Vec::with_capacity(n + 5 * s);
-                real.extend(plan.total.iter().map(|&b| T::from_f64(b)));
-                real.extend(plan.shares.iter().map(|v| T::from_f64(v.b)));
-                // The solids' velocities at the cell centres, share by share.
-                let stride = self.host_mut().stride;
-                let (mut ux, mut uy) = (Vec::with_capacity(s), Vec::with_capacity(s));
-                for y in 0..plan.rows.len().saturating_sub(1) {
-                    for c in plan.rows[y] as usize..plan.rows[y + 1] as usize {
-                        let k = plan.cells[c] as usize;
-                        for &share in
-                            &plan.shares[plan.start[c] as usize..plan.start[c + 1] as usize]
-                        {
-                            let u = plan.velocity(stride, k, y, share);
-                            ux.push(T::from_f64(u[0]));
-                            uy.push(T::from_f64(u[1]));
-                        }
-                    }
+                let plan = &**plan;
+                real.par_extend(plan.total.par_iter().map(|&b| T::from_f64(b)));
+                real.par_extend(plan.shares.par_iter().map(|v| T::from_f64(v.b)));
+                // The solids' velocities at the cell centres, share by share (x, then y).
+                let velocity = |c: usize| {
+                    let k = plan.cells[c] as usize;
+                    let y = PsmPlan::row_of(stride, k);
+                    (plan.start[c] as usize..plan.start[c + 1] as usize)
+                        .map(move |j| plan.velocity(stride, k, y, plan.shares[j]))
+                };
+                for axis in 0..2 {
+                    real.par_extend(
+                        (0..n)
+                            .into_par_iter()
+                            .flat_map_iter(|c| velocity(c).map(move |u| T::from_f64(u[axis]))),
+                    );
                 }
-                assert_eq!(ux.len(), s, "the plan's rows must cover all its cells");
-                real.extend(ux);
-                real.extend(uy);
-                real.extend(std::iter::repeat_n(T::default(), 2 * s));
+                assert_eq!(
+                    real.len(),
+                    n + 3 * s,
+                    "the plan's cells must hold all its shares"
+                );
+                real.resize(n + 5 * s, T::default());
                 self.run_moving(Kernel::Psm, prev, n, &idx, &real);
+                let (values, bad) = self.moving_reals_and_bad(n + 3 * s, 2 * s);
                 mom.clear();
-                if s > 0 {
-                    let v = self.moving_reals(n + 3 * s, 2 * s);
-                    mom.extend(v.chunks_exact(2).map(|p| [p[0].to_f64(), p[1].to_f64()]));
-                }
-                plan.cells.clone()
+                mom.extend(
+                    values
+                        .chunks_exact(2)
+                        .map(|p| [p[0].to_f64(), p[1].to_f64()]),
+                );
+                bad.map(|c| (c, plan.cells[c]))
             }
         };
-        let c = self.take_bad_cell()?;
-        let h = self.gather(&[cells[c]]);
+        (self.moving_idx, self.moving_real) = (idx, real);
+        let (c, cell) = bad?;
+        let h = self.gather(&[cell]);
         Some((c, 1.0 + h.iter().map(|v| v.to_f64()).sum::<f64>()))
     }
 

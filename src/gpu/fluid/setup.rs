@@ -288,6 +288,8 @@ impl<T: Real> GpuFluid<T> {
             pending: None,
             pending_steps: 0,
             moving: None,
+            moving_idx: Vec::new(),
+            moving_real: Vec::new(),
         };
         gpu.upload();
         Ok(gpu)
