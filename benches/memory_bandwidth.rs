@@ -18,9 +18,9 @@ fn best_of<F: FnMut()>(reps: usize, mut f: F) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// A raw pointer the update's tasks share (each writes its own range).
+/// A raw pointer the update's tasks share (each reads and writes its own cells).
 struct SharedPtr(*mut f64);
-// SAFETY: only used for disjoint writes.
+// SAFETY: each task reads and writes only its own range of cells of each plane.
 unsafe impl Sync for SharedPtr {}
 
 fn main() {

@@ -93,8 +93,9 @@ pub struct GpuFluid<T: Real> {
     pending: Option<wgpu::CommandEncoder>,
     /// Kernels of moving surfaces (grains), made on first use.
     pub(super) moving: Option<super::moving::MovingDevice>,
-    /// The moving kernels' upload data of the last step (kept for their allocations).
+    /// The moving kernels' index upload of the last step (kept for its allocation).
     pub(super) moving_idx: Vec<u32>,
+    /// The moving kernels' real upload of the last step (kept for its allocation).
     pub(super) moving_real: Vec<T>,
     pending_steps: usize,
 }

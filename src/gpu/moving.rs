@@ -101,8 +101,8 @@ impl<T: Real> GpuFluid<T> {
     }
 
     /// Run `kernel` over `threads` items with the index data `idx` and real data `real`
-    /// (uploaded first), the lattice bound as group `g`; submitted at once. Returns the
-    /// real buffer for read-backs.
+    /// (uploaded first), the lattice bound as group `g`; submitted at once. Read the
+    /// results back from the real buffer ([`GpuFluid::moving_real_buffer`]).
     fn run_moving(&mut self, kernel: Kernel, g: usize, threads: usize, idx: &[u32], real: &[T]) {
         self.flush();
         let ctx = self.ctx.clone();
@@ -171,27 +171,31 @@ impl<T: Real> GpuFluid<T> {
         ctx.queue.submit([enc.finish()]);
     }
 
-    /// `count` reals of the moving real buffer from `first`.
-    fn moving_reals(&self, first: usize, count: usize) -> Vec<T> {
-        let (_, rbuf, _) = self
+    /// The real buffer of the last moving kernel.
+    fn moving_real_buffer(&self) -> &wgpu::Buffer {
+        &self
             .moving
             .as_ref()
             .and_then(|m| m.buffers.as_ref())
-            .expect("a moving kernel ran");
-        let bytes = self.download(rbuf, first * T::BYTES, count * T::BYTES);
+            .expect("a moving kernel ran")
+            .1
+    }
+
+    /// `count` reals of the moving real buffer from `first`.
+    fn moving_reals(&self, first: usize, count: usize) -> Vec<T> {
+        let bytes = self.download(
+            self.moving_real_buffer(),
+            first * T::BYTES,
+            count * T::BYTES,
+        );
         super::fluid::from_bytes(&bytes)
     }
 
     /// `count` reals of the moving real buffer from `first`, and the first bad plan cell of
     /// the kernel that wrote them (resetting the flag): one read-back, so one wait for the
     /// device per step.
-    fn moving_reals_and_bad(&mut self, first: usize, count: usize) -> (Vec<T>, Option<usize>) {
-        let rbuf = &self
-            .moving
-            .as_ref()
-            .and_then(|m| m.buffers.as_ref())
-            .expect("a moving kernel ran")
-            .1;
+    fn moving_reals_and_bad(&self, first: usize, count: usize) -> (Vec<T>, Option<usize>) {
+        let rbuf = self.moving_real_buffer();
         let bytes = count * T::BYTES;
         let at = bytes.div_ceil(4) * 4;
         let (values, flag) = if at + 4 <= self.readback.size() as usize {
@@ -259,6 +263,11 @@ impl<T: Real> GpuFluid<T> {
                     (plan.start[c] as usize..plan.start[c + 1] as usize)
                         .map(move |j| T::from_f64(plan.wall(stride, k, y, plan.links[j])))
                 }));
+                assert_eq!(
+                    real.len(),
+                    2 * l,
+                    "the plan's cells must hold all its links"
+                );
                 real.resize(3 * l, T::default());
                 self.run_moving(Kernel::Links, prev, n, &idx, &real);
                 let (values, bad) = self.moving_reals_and_bad(2 * l, l);

@@ -152,21 +152,7 @@ impl<T: Real> Lattice<T> {
         self.layout = if push { Layout::Pushed } else { Layout::Local };
         // A moving-surface cell that went bad is the coupling's to report (it names the
         // surface), before the sweep's rows that hold it.
-        let moving_bad = match &run {
-            Some(r) if comm.size() > 1 => comm.any(r.first_bad().is_some()),
-            Some(r) => r.first_bad().is_some(),
-            None => false,
-        };
-        let bad_row = self.row_bad.iter().position(|&b| b != 0);
-        if !moving_bad {
-            if comm.size() > 1 {
-                if comm.any(bad_row.is_some()) {
-                    return Err(self.agree_on_instability(comm, bad_row));
-                }
-            } else if let Some(y) = bad_row {
-                return Err(self.locate_instability(y));
-            }
-        }
+        self.check_sweep(comm, run.as_ref())?;
         if push {
             self.drain(comm);
             self.redrain = run.is_some();

@@ -68,7 +68,9 @@ impl<T: Real> Lattice<T> {
 
     /// [`Lattice::stream_collide`], recomputing the cells of moving surfaces in `moving`
     /// right after their row is swept (see [`super::moving`]). Returns the plan index and
-    /// density of the first such cell that went NaN or non-positive (on this rank).
+    /// density of the first such cell that went NaN or non-positive (on this rank). When
+    /// such a cell went bad on any rank, the step completes on every rank without the
+    /// fluid's own error ([`Lattice::check_sweep`]): the coupling reports it.
     pub fn stream_collide_moving(
         &mut self,
         comm: &dyn Comm,
@@ -95,23 +97,7 @@ impl<T: Real> Lattice<T> {
             self.unpack_halo();
             self.sweep_part(Part::Edge, run.as_ref());
         }
-        // A moving-surface cell that went bad is the coupling's to report (it names the
-        // surface), as in place.
-        let moving_bad = match &run {
-            Some(r) if comm.size() > 1 => comm.any(r.first_bad().is_some()),
-            Some(r) => r.first_bad().is_some(),
-            None => false,
-        };
-        let bad_row = self.row_bad.iter().position(|&b| b != 0);
-        if !moving_bad {
-            if comm.size() > 1 {
-                if comm.any(bad_row.is_some()) {
-                    return Err(self.agree_on_instability(comm, bad_row));
-                }
-            } else if let Some(y) = bad_row {
-                return Err(self.locate_instability(y));
-            }
-        }
+        self.check_sweep(comm, run.as_ref())?;
         self.step += 1;
         self.cur ^= 1;
         Ok(run.and_then(|r| {
@@ -330,6 +316,34 @@ impl<T: Real> Lattice<T> {
         self.row_bad = row_bad;
         self.forces.values = slot_values;
         self.buf[self.cur ^ 1] = dst;
+    }
+
+    /// After a sweep: the first cell whose density went bad, over all ranks, unless a cell
+    /// of the moving surfaces in `run` went bad on any rank. That one is the coupling's to
+    /// report, since it names the surface, so the step then goes on and the coupling stops
+    /// the run. Collective (one agreement over the ranks per call with a run, one more
+    /// when a row went bad).
+    pub(crate) fn check_sweep(
+        &self,
+        comm: &dyn Comm,
+        run: Option<&MovingRun<'_>>,
+    ) -> Result<(), StepError> {
+        let moving_bad = match run {
+            Some(r) if comm.size() > 1 => comm.any(r.first_bad().is_some()),
+            Some(r) => r.first_bad().is_some(),
+            None => false,
+        };
+        let bad_row = self.row_bad.iter().position(|&b| b != 0);
+        if moving_bad {
+            Ok(())
+        } else if comm.size() > 1 {
+            match comm.any(bad_row.is_some()) {
+                true => Err(self.agree_on_instability(comm, bad_row)),
+                false => Ok(()),
+            }
+        } else {
+            bad_row.map_or(Ok(()), |y| Err(self.locate_instability(y)))
+        }
     }
 
     /// The first bad cell over all ranks (rank order), known to every rank. Collective.

@@ -131,18 +131,6 @@ impl LinkPlan {
         let u = self.bodies[link.body()].velocity_at(mid);
         6.0 * W[i] * (cx * u[0] + cy * u[1])
     }
-
-    /// Every link's wall term ([`LinkPlan::wall`]), in plan order (for backends that take
-    /// them as data).
-    pub fn walls(&self, stride: usize) -> impl Iterator<Item = f64> + '_ {
-        (0..self.rows.len().saturating_sub(1)).flat_map(move |y| {
-            (self.rows[y] as usize..self.rows[y + 1] as usize).flat_map(move |n| {
-                let k = self.cells[n] as usize;
-                (self.start[n] as usize..self.start[n + 1] as usize)
-                    .map(move |l| self.wall(stride, k, y, self.links[l]))
-            })
-        })
-    }
 }
 
 /// One solid's share of a partially saturated cell.
