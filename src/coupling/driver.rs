@@ -420,7 +420,8 @@ impl LbmDem {
     /// Stage "coupling" before the sweep: plan the cells at the grains' surfaces (see
     /// [`Coupler::plan`]).
     pub fn plan<T: Real>(&mut self, fluid: &dyn FluidBackend<T>) {
-        self.coupler.plan(fluid.lattice(), &self.views);
+        self.coupler
+            .plan(fluid.lattice(), &self.views, fluid.sums_per_body());
     }
 
     /// The planned cells, for the fluid's sweep.

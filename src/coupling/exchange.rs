@@ -6,7 +6,8 @@
 //!
 //! The coupler only plans: which cells, which links, which velocities (`links.rs`,
 //! `psm.rs`). The fluid backend executes the plan (`lbm::moving`) on its own device and
-//! returns one momentum per link or share, in plan order.
+//! returns one momentum per link or share, in plan order, or (a device backend) those
+//! momenta already summed per grain and column in the same order (`body_sums.rs`).
 //!
 //! **Order, and so the bits, do not depend on the partition.** The grains are seen in id
 //! order (owned and ghosts alike), each grain's cells in the order of its bounding box, so
@@ -21,7 +22,7 @@ use super::cover_update::{Change, CoverUpdate};
 use super::map::{cover, for_owned, set_cells, GrainView, SlabFrame, NONE};
 use super::sums::ColumnSums;
 use super::{Refill, Scheme};
-use crate::lbm::moving::{LinkPlan, MovingCells, PsmPlan};
+use crate::lbm::moving::{BodyColumns, LinkPlan, MovingCells, PsmPlan};
 use crate::lbm::{FluidBackend, Lattice, Real};
 use rayon::prelude::*;
 use thiserror::Error;
@@ -118,6 +119,9 @@ pub struct Coupler {
     /// Momentum per link or share of the last exchange, and scratch lists.
     pub(super) link_momentum: Vec<f64>,
     pub(super) share_momentum: Vec<[f64; 2]>,
+    /// The plan's boxes per body, and the fluid backend's sums in them when it makes
+    /// them (`body_sums.rs`).
+    pub(super) body_columns: BodyColumns,
     pub(super) rest: Vec<[f64; 2]>,
     /// PSM: where each row's shares start in the plan (scratch of the plan).
     pub(super) offsets: Vec<u32>,
@@ -179,6 +183,7 @@ impl Coupler {
             psm: PsmPlan::default(),
             link_momentum: Vec::new(),
             share_momentum: Vec::new(),
+            body_columns: BodyColumns::default(),
             rest: Vec::new(),
             offsets: Vec::new(),
             refills: Vec::new(),
@@ -298,22 +303,26 @@ impl Coupler {
     /// Stage "coupling", before the sweep: plan the cells at the grains' surfaces (links
     /// for the bounce-back schemes, solid shares for PSM) from the maps of the last remap,
     /// built for the grains `views` (the same views: the link plan took their rigid motions
-    /// then). Then let the fluid sweep with [`Coupler::moving`] and
-    /// collect the loads with [`Coupler::collect`].
-    pub fn plan<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
+    /// then). With `per_body`, also the box of each body for a fluid backend that sums the
+    /// momenta per body and column itself ([`BodyColumns`]). Then let the fluid sweep with
+    /// [`Coupler::moving`] and collect the loads with [`Coupler::collect`].
+    pub fn plan<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView], per_body: bool) {
         let t = std::time::Instant::now();
         match self.scheme {
             Scheme::Psm => self.plan_psm(lat, views),
             _ => self.plan_links(views),
         }
+        self.box_bodies(views, per_body);
         self.passes[super::pass::PLAN] += t.elapsed().as_secs_f64();
     }
 
     /// The planned cells for the fluid's sweep, with where their momenta go.
     pub fn moving(&mut self) -> MovingCells<'_> {
         match self.scheme {
-            Scheme::Psm => MovingCells::Partial(&self.psm, &mut self.share_momentum),
-            _ => MovingCells::Links(&self.links, &mut self.link_momentum),
+            Scheme::Psm => {
+                MovingCells::Partial(&self.psm, &mut self.share_momentum, &mut self.body_columns)
+            }
+            _ => MovingCells::Links(&self.links, &mut self.link_momentum, &mut self.body_columns),
         }
     }
 
@@ -323,9 +332,12 @@ impl Coupler {
     pub fn collect(&mut self, views: &[GrainView], bad: Option<(usize, f64)>) -> Option<Unstable> {
         let t = std::time::Instant::now();
         self.sums.reset(views, self.frame.global_nx);
-        let bad = match self.scheme {
-            Scheme::Psm => self.collect_psm(views, bad),
-            _ => self.collect_links(views, bad),
+        let bad = if self.body_columns.made {
+            self.collect_bodies(views, bad)
+        } else if self.scheme == Scheme::Psm {
+            self.collect_psm(views, bad)
+        } else {
+            self.collect_links(views, bad)
         };
         self.passes[super::pass::COLLECT] += t.elapsed().as_secs_f64();
         bad

@@ -26,7 +26,11 @@ impl Coupler {
     }
 
     /// [`Coupler::rebuild_lists`] with `fluid(k)` telling whether padded cell k is fluid.
-    fn group_lists(&mut self, fluid: &(impl Fn(usize) -> bool + Sync), views: &[GrainView]) {
+    pub(super) fn group_lists(
+        &mut self,
+        fluid: &(impl Fn(usize) -> bool + Sync),
+        views: &[GrainView],
+    ) {
         if self.scheme == Scheme::Psm {
             return;
         }

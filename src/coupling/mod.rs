@@ -12,6 +12,7 @@
 //!    hands over the cells the grains covered or uncovered;
 //! 4. `boundaries`: the fluid's halo refill.
 
+mod body_sums;
 mod boundary_lists;
 mod cover_update;
 pub mod driver;

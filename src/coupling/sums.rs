@@ -98,6 +98,22 @@ impl ColumnSums {
         }
     }
 
+    /// Add `load` to the slot of global column `column` in the window `w` (from
+    /// [`ColumnSums::window`]): as [`Adder::add_to`], serially.
+    #[inline]
+    pub fn add_in(&mut self, w: &Window, column: usize, load: Load) {
+        let at = w.offset + column as i64;
+        assert!(
+            at >= w.first as i64 && (at as usize) < w.end,
+            "column outside the grain's window"
+        );
+        let s = &mut self.sums[at as usize];
+        s[0] += load[0];
+        s[1] += load[1];
+        s[2] += load[2];
+        self.used[at as usize] = true;
+    }
+
     /// Fill the sums in parallel, one task per band of the global columns `lo..hi`:
     /// `fill(band, adder)` adds (with [`Adder::add`]) the loads of the band's columns, in
     /// the order one serial fill would add them. Bands hold different columns, hence

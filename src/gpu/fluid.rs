@@ -538,6 +538,10 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         Ok(self.moving_cells(moving))
     }
 
+    fn sums_per_body(&self) -> bool {
+        true
+    }
+
     fn refresh_halos_full(&mut self, comm: &dyn Comm) {
         self.halos_full(comm)
     }

@@ -2,6 +2,7 @@
 //! GPU fluid solver ([`fluid::GpuFluid`]), which implements
 //! [`crate::lbm::FluidBackend`] on one rank's slab.
 
+mod body_columns;
 pub mod buffers;
 pub mod context;
 pub mod fluid;

@@ -1,10 +1,13 @@
 //! Moving surfaces (`lbm::moving`) on the device backend: the plan's cells are recomputed on
-//! the device right after the sweep (`shaders/moving.wgsl`); what comes back is one momentum
-//! per link or solid share, which the host sums per grain and column in a fixed order (so the
-//! forces have the same bits on any rank count). Rest fills, refills and cell momenta move
+//! the device right after the sweep (`shaders/moving.wgsl`), and their momenta summed per
+//! body and column there (`shaders/body_columns.wgsl`) in the order the host's collect uses
+//! (so the forces have the same bits on any rank count): what comes back is about a dozen
+//! loads per body, or one momentum per link or solid share when the caller asks for no
+//! sums. Rest fills, refills and cell momenta move
 //! whole cells between host and device through small gather and scatter kernels, so their
 //! arithmetic is the CPU backend's, to the bit.
 
+use super::body_columns::{append_bodies, read_sums};
 use super::buffers::{job_groups, round16, shader_source};
 use super::fluid::GpuFluid;
 use crate::lbm::d2q9::Q;
@@ -21,6 +24,8 @@ use std::collections::HashMap;
 pub(crate) struct MovingDevice {
     links: wgpu::ComputePipeline,
     psm: wgpu::ComputePipeline,
+    body_links: wgpu::ComputePipeline,
+    body_psm: wgpu::ComputePipeline,
     gather: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
@@ -33,6 +38,8 @@ pub(crate) struct MovingDevice {
 enum Kernel {
     Links,
     Psm,
+    BodyLinks,
+    BodyPsm,
     Gather,
     Scatter,
 }
@@ -60,7 +67,8 @@ impl<T: Real> GpuFluid<T> {
                 entries: &[storage(0, true), storage(1, false)],
             });
             let source = shader_source(T::NAME, self.stored_name(), self.split)
-                + include_str!("shaders/moving.wgsl");
+                + include_str!("shaders/moving.wgsl")
+                + include_str!("shaders/body_columns.wgsl");
             let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("grainflow moving surfaces"),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -91,6 +99,8 @@ impl<T: Real> GpuFluid<T> {
             self.moving = Some(MovingDevice {
                 links: make("moving_links"),
                 psm: make("moving_psm"),
+                body_links: make("body_columns_links"),
+                body_psm: make("body_columns_psm"),
                 gather: make("gather_cells"),
                 scatter: make("scatter_cells"),
                 layout,
@@ -100,13 +110,24 @@ impl<T: Real> GpuFluid<T> {
         self.moving.as_mut().expect("made above")
     }
 
-    /// Run `kernel` over `threads` items with the index data `idx` and real data `real`
-    /// (uploaded first), the lattice bound as group `g`; submitted at once. Read the
+    /// Run `kernels` in turn, each over its number of items, with the index data `idx` and
+    /// real data `real` (uploaded first; the real buffer holds `scratch` more reals that
+    /// the kernels write), the lattice bound as group `g`; submitted at once. Read the
     /// results back from the real buffer ([`GpuFluid::moving_real_buffer`]).
-    fn run_moving(&mut self, kernel: Kernel, g: usize, threads: usize, idx: &[u32], real: &[T]) {
+    fn run_moving(
+        &mut self,
+        kernels: &[(Kernel, usize)],
+        g: usize,
+        idx: &[u32],
+        real: &[T],
+        scratch: usize,
+    ) {
         self.flush();
         let ctx = self.ctx.clone();
-        let (idx_bytes, real_bytes) = (round16(idx.len() * 4), round16(real.len() * T::BYTES));
+        let (idx_bytes, real_bytes) = (
+            round16(idx.len() * 4),
+            round16((real.len() + scratch) * T::BYTES),
+        );
         self.moving_device();
         let (lattice_group, list_group) = (self.groups[g].clone(), self.inner_list_group());
         let dev = self.moving.as_mut().expect("made above");
@@ -152,14 +173,17 @@ impl<T: Real> GpuFluid<T> {
             ctx.queue
                 .write_buffer(rbuf, 0, &super::fluid::to_bytes(real));
         }
-        let pipe = match kernel {
-            Kernel::Links => &dev.links,
-            Kernel::Psm => &dev.psm,
-            Kernel::Gather => &dev.gather,
-            Kernel::Scatter => &dev.scatter,
-        };
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        if threads > 0 {
+        for &(kernel, threads) in kernels.iter().filter(|k| k.1 > 0) {
+            let pipe = match kernel {
+                Kernel::Links => &dev.links,
+                Kernel::Psm => &dev.psm,
+                Kernel::BodyLinks => &dev.body_links,
+                Kernel::BodyPsm => &dev.body_psm,
+                Kernel::Gather => &dev.gather,
+                Kernel::Scatter => &dev.scatter,
+            };
+            // One pass per kernel: the next sees all the writes of the one before.
             let (gx, gy) = job_groups(threads);
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(pipe);
@@ -232,11 +256,13 @@ impl<T: Real> GpuFluid<T> {
     }
 
     /// Recompute the cells of `moving` right after the sweep (the lattice group whose source
-    /// is the buffer the sweep read). Returns the plan index and density of the first cell
-    /// that went bad. The upload is packed in parallel into buffers kept between steps.
+    /// is the buffer the sweep read), and sum their momenta per body and column when its
+    /// [`BodyColumns`] ask for it (then only those sums come back). Returns the plan index
+    /// and density of the first cell that went bad. The upload is packed in parallel into
+    /// buffers kept between steps.
     pub(crate) fn moving_cells(&mut self, moving: &mut MovingCells<'_>) -> Option<(usize, f64)> {
         let prev = self.host_mut().cur ^ 1;
-        let stride = self.host_mut().stride;
+        let (stride, ny) = (self.host_mut().stride, self.host_mut().ny);
         self.ctx
             .queue
             .write_buffer(&self.bad_buf, 12, bytemuck::bytes_of(&u32::MAX));
@@ -248,12 +274,12 @@ impl<T: Real> GpuFluid<T> {
         real.clear();
         let bad = match moving {
             MovingCells::None => None,
-            MovingCells::Links(plan, mom) => {
+            MovingCells::Links(plan, mom, sums) => {
                 let (n, l) = (plan.cells.len(), plan.links.len());
                 idx.extend_from_slice(&[n as u32, l as u32]);
                 idx.extend_from_slice(&plan.cells);
                 idx.extend_from_slice(&plan.start);
-                idx.par_extend(plan.links.par_iter().map(|k| k.dir() as u32));
+                idx.par_extend(plan.links.par_iter().map(|k| k.bits()));
                 let plan = &**plan;
                 real.par_extend((0..l).into_par_iter().map(|j| T::from_f64(plan.q(j))));
                 // Each link's wall term, cell by cell (a cell's links are contiguous).
@@ -269,17 +295,42 @@ impl<T: Real> GpuFluid<T> {
                     "the plan's cells must hold all its links"
                 );
                 real.resize(3 * l, T::default());
-                self.run_moving(Kernel::Links, prev, n, &idx, &real);
-                let (values, bad) = self.moving_reals_and_bad(2 * l, l);
-                mom.clear();
-                mom.extend(values.iter().map(|v| v.to_f64()));
+                let bad = match append_bodies(
+                    &mut idx,
+                    &mut real,
+                    sums,
+                    &plan.rows,
+                    &plan.bodies,
+                    plan.x0,
+                    ny,
+                ) {
+                    Some(b) => {
+                        let kernels = [(Kernel::Links, n), (Kernel::BodyLinks, b.groups)];
+                        self.run_moving(&kernels, prev, &idx, &real, b.scratch);
+                        let (values, bad) = self.moving_reals_and_bad(b.out_at, 4 * b.slots);
+                        read_sums(&values, sums);
+                        mom.clear();
+                        bad
+                    }
+                    None => {
+                        self.run_moving(&[(Kernel::Links, n)], prev, &idx, &real, 0);
+                        let (values, bad) = self.moving_reals_and_bad(2 * l, l);
+                        mom.clear();
+                        mom.extend(values.iter().map(|v| v.to_f64()));
+                        bad
+                    }
+                };
                 bad.map(|c| (c, plan.cells[c]))
             }
-            MovingCells::Partial(plan, mom) => {
+            MovingCells::Partial(plan, mom, sums) => {
                 let (n, s) = (plan.cells.len(), plan.shares.len());
                 idx.extend_from_slice(&[n as u32, s as u32]);
                 idx.extend_from_slice(&plan.cells);
                 idx.extend_from_slice(&plan.start);
+                if sums.wanted() {
+                    // Each share's body, for the sums.
+                    idx.par_extend(plan.shares.par_iter().map(|v| v.body));
+                }
                 let plan = &**plan;
                 real.par_extend(plan.total.par_iter().map(|&b| T::from_f64(b)));
                 real.par_extend(plan.shares.par_iter().map(|v| T::from_f64(v.b)));
@@ -303,14 +354,35 @@ impl<T: Real> GpuFluid<T> {
                     "the plan's cells must hold all its shares"
                 );
                 real.resize(n + 5 * s, T::default());
-                self.run_moving(Kernel::Psm, prev, n, &idx, &real);
-                let (values, bad) = self.moving_reals_and_bad(n + 3 * s, 2 * s);
-                mom.clear();
-                mom.extend(
-                    values
-                        .chunks_exact(2)
-                        .map(|p| [p[0].to_f64(), p[1].to_f64()]),
-                );
+                let bad = match append_bodies(
+                    &mut idx,
+                    &mut real,
+                    sums,
+                    &plan.rows,
+                    &plan.bodies,
+                    plan.x0,
+                    ny,
+                ) {
+                    Some(b) => {
+                        let kernels = [(Kernel::Psm, n), (Kernel::BodyPsm, b.groups)];
+                        self.run_moving(&kernels, prev, &idx, &real, b.scratch);
+                        let (values, bad) = self.moving_reals_and_bad(b.out_at, 4 * b.slots);
+                        read_sums(&values, sums);
+                        mom.clear();
+                        bad
+                    }
+                    None => {
+                        self.run_moving(&[(Kernel::Psm, n)], prev, &idx, &real, 0);
+                        let (values, bad) = self.moving_reals_and_bad(n + 3 * s, 2 * s);
+                        mom.clear();
+                        mom.extend(
+                            values
+                                .chunks_exact(2)
+                                .map(|p| [p[0].to_f64(), p[1].to_f64()]),
+                        );
+                        bad
+                    }
+                };
                 bad.map(|c| (c, plan.cells[c]))
             }
         };
@@ -329,7 +401,7 @@ impl<T: Real> GpuFluid<T> {
         let mut idx = vec![cells.len() as u32, 0];
         idx.extend_from_slice(cells);
         let zeros = vec![T::default(); Q * cells.len()];
-        self.run_moving(Kernel::Gather, cur, cells.len(), &idx, &zeros);
+        self.run_moving(&[(Kernel::Gather, cells.len())], cur, &idx, &zeros, 0);
         self.moving_reals(0, Q * cells.len())
     }
 
@@ -341,7 +413,13 @@ impl<T: Real> GpuFluid<T> {
         let dst_is_cur = self.host_mut().cur ^ 1;
         let mut idx = vec![cells.len() as u32, 0];
         idx.extend_from_slice(cells);
-        self.run_moving(Kernel::Scatter, dst_is_cur, cells.len(), &idx, values);
+        self.run_moving(
+            &[(Kernel::Scatter, cells.len())],
+            dst_is_cur,
+            &idx,
+            values,
+            0,
+        );
     }
 
     /// Rest fill (see [`crate::lbm::Lattice::set_rest`]): the same values, made on the host.

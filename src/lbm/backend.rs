@@ -23,13 +23,20 @@ pub trait FluidBackend<T: Real> {
     fn update_boundaries(&mut self);
     /// [`FluidBackend::stream_collide`] with the cells of moving surfaces (see
     /// [`super::moving`]) recomputed after the sweep; one momentum per link or share in
-    /// `moving`. Returns the plan index and density of the first such cell (on this rank)
+    /// `moving`, or their sums per body and column (see [`FluidBackend::sums_per_body`]).
+    /// Returns the plan index and density of the first such cell (on this rank)
     /// that went bad. Collective.
     fn stream_collide_moving(
         &mut self,
         comm: &dyn Comm,
         moving: &mut MovingCells<'_>,
     ) -> Result<Option<(usize, f64)>, StepError>;
+    /// Whether [`FluidBackend::stream_collide_moving`] sums the momenta per body and column
+    /// itself when the plan's [`super::moving::BodyColumns`] ask for it (a device backend:
+    /// then only those sums come back to the host).
+    fn sums_per_body(&self) -> bool {
+        false
+    }
     /// Make every halo cell of the current state hold its neighbour's whole cell: the local
     /// faces refilled (periodic, free-slip, outflow) and all nine populations of the
     /// neighbours' edge columns across rank faces. Collective.

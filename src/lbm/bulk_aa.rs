@@ -283,7 +283,7 @@ pub(crate) unsafe fn sweep_run<T: Real, C: Collider<T>>(
 mod tests {
     use super::super::collision::Collision;
     use super::super::lattice::{FaceCondition, Lattice, LatticeSetup, SolidInfo, FLUID};
-    use super::super::moving::{MovingCells, PsmPlan, RigidMotion, SolidShare};
+    use super::super::moving::{BodyColumns, MovingCells, PsmPlan, RigidMotion, SolidShare};
     use super::*;
     use decomposition::SingleProcess;
 
@@ -401,7 +401,10 @@ mod tests {
         for step in 0..4 {
             for (lat, m) in [(&mut two, &mut m2), (&mut one, &mut m1)] {
                 let bad = lat
-                    .stream_collide_moving(&SingleProcess, &mut MovingCells::Partial(&plan, m))
+                    .stream_collide_moving(
+                        &SingleProcess,
+                        &mut MovingCells::Partial(&plan, m, &mut BodyColumns::default()),
+                    )
                     .unwrap();
                 assert!(bad.is_none());
                 lat.update_boundaries();
@@ -422,8 +425,11 @@ mod tests {
         without.make_in_place();
         let (plan, mut m) = (PsmPlan::default(), Vec::new());
         for _ in 0..2 {
-            with.stream_collide_moving(&SingleProcess, &mut MovingCells::Partial(&plan, &mut m))
-                .unwrap();
+            with.stream_collide_moving(
+                &SingleProcess,
+                &mut MovingCells::Partial(&plan, &mut m, &mut BodyColumns::default()),
+            )
+            .unwrap();
             without
                 .stream_collide_moving(&SingleProcess, &mut MovingCells::None)
                 .unwrap();

@@ -22,7 +22,9 @@ use super::partial::{partial_cell, PartialSweep};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-pub use super::plans::{LinkPlan, MovingLink, PsmPlan, Refill, RigidMotion, SolidShare};
+pub use super::plans::{
+    BodyColumns, LinkPlan, MovingLink, PsmPlan, Refill, RigidMotion, SolidShare,
+};
 
 /// A raw pointer shared by rayon tasks that write disjoint elements.
 #[derive(Clone, Copy)]
@@ -66,18 +68,19 @@ pub fn momentum_of(h: &[f64; Q]) -> [f64; 2] {
 
 /// Cells of moving surfaces that a sweep computes with their row (in place: link cells
 /// prepared just ahead of it, partially saturated cells inside it) or right after it (two
-/// arrays: the data is still in cache), with where the momenta go.
+/// arrays: the data is still in cache), with where the momenta go: one per link or share, or
+/// (a backend that can, when the [`BodyColumns`] ask for it) summed per body and column.
 pub enum MovingCells<'a> {
     /// Nothing to recompute.
     None,
     /// Links to moving surfaces; `momentum[l]` receives f*_ī + f_i of link l (seed eq. 5.47:
     /// the surface gets −that × c_i; shifted populations, so the rest state's part is left
     /// out).
-    Links(&'a LinkPlan, &'a mut Vec<f64>),
+    Links(&'a LinkPlan, &'a mut Vec<f64>, &'a mut BodyColumns),
     /// Partially saturated cells (Noble & Torczynski 1998, eqs. 8–9; seed eqs. 5.53–5.54):
     /// f_i ← (1 − B) f_i^fluid-collided + Σ_s B_s (f_i + Ω^s_i); `momentum[s]` receives the
     /// momentum solid share s takes from the fluid (−Σ_i B_s Ω^s_i c_i).
-    Partial(&'a PsmPlan, &'a mut Vec<[f64; 2]>),
+    Partial(&'a PsmPlan, &'a mut Vec<[f64; 2]>, &'a mut BodyColumns),
 }
 
 /// A plan being executed by one sweep.
@@ -100,12 +103,14 @@ impl<'a> MovingRun<'a> {
     pub(crate) fn new(cells: &'a mut MovingCells<'_>, edge: [Option<usize>; 2]) -> Option<Self> {
         let kind = match cells {
             MovingCells::None => return None,
-            MovingCells::Links(plan, m) => {
+            MovingCells::Links(plan, m, sums) => {
+                sums.made = false;
                 m.clear();
                 m.resize(plan.links.len(), 0.0);
                 RunKind::Links(plan, Disjoint(m.as_mut_ptr()))
             }
-            MovingCells::Partial(plan, m) => {
+            MovingCells::Partial(plan, m, sums) => {
+                sums.made = false;
                 m.clear();
                 m.resize(plan.shares.len(), [0.0; 2]);
                 RunKind::Partial(plan, Disjoint(m.as_mut_ptr()))

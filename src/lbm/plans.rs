@@ -33,6 +33,12 @@ impl MovingLink {
     pub fn body(self) -> usize {
         (self.0 >> 4) as usize
     }
+
+    /// The packed word: body · 16 + dir (a device kernel unpacks it).
+    #[inline]
+    pub fn bits(self) -> u32 {
+        self.0
+    }
 }
 
 /// The rigid motion of one moving surface, lattice units: the wall's velocity at a point p
@@ -191,6 +197,81 @@ impl PsmPlan {
     #[inline]
     pub fn row_of(stride: usize, k: usize) -> usize {
         k / stride - 1
+    }
+}
+
+/// The momenta of a plan summed per group of bodies and column by the backend that executes
+/// it, instead of reported one per link or share: a device backend then sends back one load
+/// per group and column (about a dozen per grain) rather than one momentum per link or share.
+///
+/// A group is one body, or the images of one body across a periodic y face (they share
+/// their columns, and the host sums them into the same column sums). The caller fills the
+/// boxes and groups before the sweep; a backend that can (see
+/// [`crate::lbm::FluidBackend::sums_per_body`]) fills `sums` and `counts`, sets `made`, and
+/// leaves the per-link or per-share momenta empty. Each slot is summed over the cells of its
+/// column in increasing row (the group's bodies in turn, in increasing first row), each
+/// cell's links or shares in plan order: the order of a serial walk of the plan restricted
+/// to the slot, so it does not depend on how the lattice is split into slabs of columns.
+#[derive(Debug, Clone, Default)]
+pub struct BodyColumns {
+    /// Per body of the plan: `[first local column, columns, first local row, rows]` of the
+    /// box that holds every plan cell with a link or share of that body (clipped to the
+    /// slab's interior). Empty when no sums are wanted.
+    pub boxes: Vec<[u32; 4]>,
+    /// The bodies, group by group, each group's in increasing first row of their boxes
+    /// (which span the same columns).
+    pub members: Vec<u32>,
+    /// Where each group starts in `members`; one more value than groups.
+    pub groups: Vec<u32>,
+    /// Each group's first slot (one slot per column of its boxes); one more value than
+    /// groups.
+    pub first: Vec<u32>,
+    /// Out, per slot: the momentum the group receives, [p_x, p_y, torque about the centre
+    /// of the body each term belongs to], lattice units: −(f*_ī + f_i) c_i at the link's
+    /// midpoint (seed eqs. 5.47–5.48) or a share's momentum at its cell's centre (seed eq.
+    /// 5.54).
+    pub sums: Vec<[f64; 3]>,
+    /// Out, per slot: how many links or shares it sums (0: the column has none).
+    pub counts: Vec<u32>,
+    /// Out: the backend made the sums.
+    pub made: bool,
+}
+
+impl BodyColumns {
+    /// No sums wanted.
+    pub fn clear(&mut self) {
+        self.boxes.clear();
+        self.members.clear();
+        self.groups.clear();
+        self.first.clear();
+        self.sums.clear();
+        self.counts.clear();
+        self.made = false;
+    }
+
+    /// Whether sums are wanted (boxes given).
+    pub fn wanted(&self) -> bool {
+        !self.boxes.is_empty()
+    }
+
+    /// Slots of all groups.
+    pub fn slots(&self) -> usize {
+        self.first.last().map_or(0, |&n| n as usize)
+    }
+
+    /// Bodies of group `j`.
+    pub fn group(&self, j: usize) -> &[u32] {
+        &self.members[self.groups[j] as usize..self.groups[j + 1] as usize]
+    }
+
+    /// The columns `[first local column, columns]` of group `j`: those of its bodies whose
+    /// boxes are not empty (they agree), or none.
+    pub fn columns(&self, j: usize) -> [u32; 2] {
+        self.group(j)
+            .iter()
+            .map(|&b| self.boxes[b as usize])
+            .find(|bx| bx[1] > 0)
+            .map_or([0, 0], |bx| [bx[0], bx[1]])
     }
 }
 

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod gpu_parity;
+
 use grainflow::run::{run, Precision, RunOptions, Status, Summary};
 use std::path::{Path, PathBuf};
 

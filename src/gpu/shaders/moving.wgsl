@@ -2,7 +2,7 @@
 // moving surface recomputed after a sweep with their links bounced back, partially saturated
 // cells, and plain gathers and scatters of whole cells for the host's rules (rest fills,
 // refills, momenta, full halos). Bound as group 2:
-//   mv_idx  [n cells, n links or shares, cells[n], start[n + 1], dirs[links]]
+//   mv_idx  [n cells, n links or shares, cells[n], start[n + 1], links: body · 16 + dir]
 //   mv_real links: [q[L], wall[L], momentum out[L]]
 //           PSM:   [B[n], b[S], u_x[S], u_y[S], momentum out[2S]]
 //           gather / scatter: [9 values per cell]
@@ -49,7 +49,7 @@ fn moving_links(@builtin(global_invocation_id) gid: vec3<u32>,
     let last = mv_idx[3u + n + c];
     let dirs = 3u + 2u * n;
     for (var l = first; l < last; l++) {
-        let i = mv_idx[dirs + l];
+        let i = mv_idx[dirs + l] & 15u;
         let q = mv_real[l];
         let wall = mv_real[nl + l];
         let out_i = ld(OPP[i], k);
