@@ -13,7 +13,8 @@ use super::fluid::GpuFluid;
 use crate::lbm::d2q9::Q;
 use crate::lbm::moving::PsmPlan;
 use crate::lbm::moving::{
-    equilibrium_at, momentum_of, refill_cell, refill_sources, MovingCells, Refill,
+    equilibrium_at, momentum_of, refill_cell, refill_sources, BodyColumns, MovingCells, Refill,
+    RigidMotion,
 };
 use crate::lbm::Real;
 use decomposition::Comm;
@@ -295,31 +296,17 @@ impl<T: Real> GpuFluid<T> {
                     "the plan's cells must hold all its links"
                 );
                 real.resize(3 * l, T::default());
-                let bad = match append_bodies(
-                    &mut idx,
-                    &mut real,
+                let frame = (&plan.rows[..], &plan.bodies[..], plan.x0, ny);
+                let (values, bad) = self.run_plan(
+                    (Kernel::Links, Kernel::BodyLinks, n),
+                    prev,
+                    (&mut idx, &mut real),
+                    frame,
                     sums,
-                    &plan.rows,
-                    &plan.bodies,
-                    plan.x0,
-                    ny,
-                ) {
-                    Some(b) => {
-                        let kernels = [(Kernel::Links, n), (Kernel::BodyLinks, b.groups)];
-                        self.run_moving(&kernels, prev, &idx, &real, b.scratch);
-                        let (values, bad) = self.moving_reals_and_bad(b.out_at, 4 * b.slots);
-                        read_sums(&values, sums);
-                        mom.clear();
-                        bad
-                    }
-                    None => {
-                        self.run_moving(&[(Kernel::Links, n)], prev, &idx, &real, 0);
-                        let (values, bad) = self.moving_reals_and_bad(2 * l, l);
-                        mom.clear();
-                        mom.extend(values.iter().map(|v| v.to_f64()));
-                        bad
-                    }
-                };
+                    2 * l..3 * l,
+                );
+                mom.clear();
+                mom.extend(values.iter().map(|v| v.to_f64()));
                 bad.map(|c| (c, plan.cells[c]))
             }
             MovingCells::Partial(plan, mom, sums) => {
@@ -354,35 +341,21 @@ impl<T: Real> GpuFluid<T> {
                     "the plan's cells must hold all its shares"
                 );
                 real.resize(n + 5 * s, T::default());
-                let bad = match append_bodies(
-                    &mut idx,
-                    &mut real,
+                let frame = (&plan.rows[..], &plan.bodies[..], plan.x0, ny);
+                let (values, bad) = self.run_plan(
+                    (Kernel::Psm, Kernel::BodyPsm, n),
+                    prev,
+                    (&mut idx, &mut real),
+                    frame,
                     sums,
-                    &plan.rows,
-                    &plan.bodies,
-                    plan.x0,
-                    ny,
-                ) {
-                    Some(b) => {
-                        let kernels = [(Kernel::Psm, n), (Kernel::BodyPsm, b.groups)];
-                        self.run_moving(&kernels, prev, &idx, &real, b.scratch);
-                        let (values, bad) = self.moving_reals_and_bad(b.out_at, 4 * b.slots);
-                        read_sums(&values, sums);
-                        mom.clear();
-                        bad
-                    }
-                    None => {
-                        self.run_moving(&[(Kernel::Psm, n)], prev, &idx, &real, 0);
-                        let (values, bad) = self.moving_reals_and_bad(n + 3 * s, 2 * s);
-                        mom.clear();
-                        mom.extend(
-                            values
-                                .chunks_exact(2)
-                                .map(|p| [p[0].to_f64(), p[1].to_f64()]),
-                        );
-                        bad
-                    }
-                };
+                    n + 3 * s..n + 5 * s,
+                );
+                mom.clear();
+                mom.extend(
+                    values
+                        .chunks_exact(2)
+                        .map(|p| [p[0].to_f64(), p[1].to_f64()]),
+                );
                 bad.map(|c| (c, plan.cells[c]))
             }
         };
@@ -390,6 +363,38 @@ impl<T: Real> GpuFluid<T> {
         let (c, cell) = bad?;
         let h = self.gather(&[cell]);
         Some((c, 1.0 + h.iter().map(|v| v.to_f64()).sum::<f64>()))
+    }
+
+    /// Run a plan's moving kernel (`kernels`: it, the per-body kernel, the plan's cells)
+    /// with the uploads `data`, the lattice group `g`. When `sums` ask for them, append the
+    /// per-body section (`frame`: the plan's rows and bodies, its slab's global x of column
+    /// 0, the rows), run the per-body kernel too and read only the sums back into `sums`;
+    /// otherwise read back the momenta at `momenta` of the real buffer. Returns those
+    /// momenta (none with sums) and the first bad plan cell.
+    fn run_plan(
+        &mut self,
+        kernels: (Kernel, Kernel, usize),
+        g: usize,
+        data: (&mut Vec<u32>, &mut Vec<T>),
+        frame: (&[u32], &[RigidMotion], i64, usize),
+        sums: &mut BodyColumns,
+        momenta: std::ops::Range<usize>,
+    ) -> (Vec<T>, Option<usize>) {
+        let (kernel, body, n) = kernels;
+        let (idx, real) = data;
+        let (rows, bodies, x0, ny) = frame;
+        match append_bodies(idx, real, sums, rows, bodies, x0, ny) {
+            Some(b) => {
+                self.run_moving(&[(kernel, n), (body, b.groups)], g, idx, real, b.scratch);
+                let (values, bad) = self.moving_reals_and_bad(b.out_at, 4 * b.slots);
+                read_sums(&values, sums);
+                (Vec::new(), bad)
+            }
+            None => {
+                self.run_moving(&[(kernel, n)], g, idx, real, 0);
+                self.moving_reals_and_bad(momenta.start, momenta.len())
+            }
+        }
     }
 
     /// The 9 populations of each of `cells` (padded) in the current state.
