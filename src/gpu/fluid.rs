@@ -452,7 +452,8 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         };
         let all = comm.all_gather_f64(&mine);
         Err(StepError {
-            step: all[0] as u64,
+            // The device counts the steps done before the bad one; errors count from 1.
+            step: all[0] as u64 + 1,
             x: all[1] as usize,
             y: all[2] as usize,
             density: all[3],

@@ -358,7 +358,9 @@ impl<T: Real> Lattice<T> {
         };
         let all = comm.all_gather_f64(&mine);
         StepError {
-            step: self.step,
+            // The sweep under way is step self.step + 1 (counted from 1, as the coupling's
+            // errors and the progress count them).
+            step: self.step + 1,
             x: all[0] as usize,
             y: all[1] as usize,
             density: all[2],
@@ -390,7 +392,9 @@ impl<T: Real> Lattice<T> {
             }
         }
         StepError {
-            step: self.step,
+            // The sweep under way is step self.step + 1 (counted from 1, as the coupling's
+            // errors and the progress count them).
+            step: self.step + 1,
             x: self.x0 + worst.0,
             y,
             density: worst.1,

@@ -124,7 +124,8 @@ pub struct LatticeSetup {
 #[derive(Debug, Error, Clone, PartialEq)]
 #[error("unstable at step {step}: cell ({x}, {y}) has density {density} (NaN or ≤ 0); reduce the velocity, raise τ or refine the lattice")]
 pub struct StepError {
-    /// Step that produced the bad value.
+    /// Step that produced the bad value, counted from 1 (the first step is step 1; the
+    /// state after step − 1 steps was the last good one).
     pub step: u64,
     /// Cell x.
     pub x: usize,
