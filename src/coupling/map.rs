@@ -90,8 +90,7 @@ impl SlabFrame {
     /// [`SlabFrame::centre`] of padded cell `k`, known to lie in local row `y`.
     #[inline]
     pub fn centre_in_row(&self, k: usize, y: usize) -> [f64; 2] {
-        let x = self.x_in_row(k, y);
-        [(x + self.x0 as i64) as f64 + 0.5, y as f64 + 0.5]
+        crate::lbm::moving::cell_centre(self.stride, self.x0 as i64, k, y)
     }
 
     /// Visit, in plan order, the cells of a row-grouped plan (`rows`: where each local

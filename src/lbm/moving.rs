@@ -23,7 +23,7 @@ use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 pub use super::plans::{
-    BodyColumns, LinkPlan, MovingLink, PsmPlan, Refill, RigidMotion, SolidShare,
+    cell_centre, BodyColumns, LinkPlan, MovingLink, PsmPlan, Refill, RigidMotion, SolidShare,
 };
 
 /// A raw pointer shared by rayon tasks that write disjoint elements.

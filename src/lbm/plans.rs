@@ -69,7 +69,7 @@ impl RigidMotion {
 /// Centre (global lattice coordinates) of the cell at padded index `k` in local row `y` of a
 /// slab with row stride `stride` whose local column 0 is global column `x0`.
 #[inline]
-fn cell_centre(stride: usize, x0: i64, k: usize, y: usize) -> [f64; 2] {
+pub fn cell_centre(stride: usize, x0: i64, k: usize, y: usize) -> [f64; 2] {
     let x = k as i64 - ((y + 1) * stride) as i64 - 1;
     [(x + x0) as f64 + 0.5, y as f64 + 0.5]
 }
