@@ -3,10 +3,18 @@
 //! backend then sends back about a dozen loads per grain instead of one momentum per link or
 //! share, and the host's collect becomes one addition per grain and column.
 //!
-//! The slot of a body and column holds what the serial collect (`links.rs`, `psm.rs`) would
-//! have added to that grain's column sum: the same terms in the same order (the column's
-//! cells in increasing row, each cell's links or shares in plan order), so the column sums,
-//! and the totals the owners fold from them (`sums.rs`), stay independent of the ranks.
+//! The slot of a group of bodies and a column holds what the serial collect (`links.rs`,
+//! `psm.rs`) would have added to that grain's column sum: the same terms in the same order
+//! (the column's cells in increasing row, each cell's links or shares in plan order), so the
+//! column sums, and the totals the owners fold from them (`sums.rs`), stay independent of
+//! the ranks. The backend's arithmetic may differ from the host's by rounding (the device
+//! sums with compensation and takes each arm from the cell holding the body's centre): the
+//! same bits on any rank count, not the CPU backend's bits.
+//!
+//! Only where every grain is small against the lattice (a diameter plus the boxes' margins
+//! under its height and width): a grain's images then never share rows, and a link's body
+//! (the image nearest to its midpoint) is the image that covers its cell. Otherwise the
+//! backend reports one momentum per link or share as before.
 
 use super::exchange::{Coupler, Unstable};
 use super::map::GrainView;
@@ -29,8 +37,8 @@ impl Coupler {
     }
 
     /// Fill the boxes and groups of the body columns (`Coupler::body_columns`) for the plan
-    /// just built from `views`, when the fluid backend sums per body (`wanted`); otherwise
-    /// leave them empty. A group is a run of bodies of one grain with one centre x: the
+    /// just built from `views`, when the fluid backend sums per body (`wanted`) and every
+    /// grain is small against the lattice (see the module docs); otherwise leave them empty. A group is a run of bodies of one grain with one centre x: the
     /// grain's images across a periodic y face (`SlabFrame::images` lists them together).
     pub(super) fn box_bodies(&mut self, views: &[GrainView], wanted: bool) {
         let mut out = std::mem::take(&mut self.body_columns);
@@ -39,8 +47,12 @@ impl Coupler {
             Scheme::Psm => self.disk_images.len(),
             _ => self.links.bodies.len(),
         };
-        if wanted {
-            let f = self.frame;
+        let f = self.frame;
+        let room = f.ny.min(f.global_nx) as f64;
+        let small = views
+            .iter()
+            .all(|v| 2.0 * (v.radius + (MARGIN + 2) as f64) < room);
+        if wanted && small {
             // Local columns or rows of the disk's cells, widened and clipped to the slab.
             let span = |lo: f64, hi: f64, n: usize| -> [u32; 2] {
                 let a = (lo.floor() as i64 - MARGIN).max(0);
@@ -267,6 +279,12 @@ mod tests {
                     c.collect_bodies(&views, None)
                 }));
                 assert!(lost.is_err(), "case {case}: a lost link went unnoticed");
+                // A grain too large for its lattice's height: no sums wanted, the backend
+                // reports each link's momentum.
+                let mut big = views.clone();
+                big[0].radius = 0.5 * f.ny as f64 - 4.0;
+                c.box_bodies(&big, true);
+                assert!(!c.body_columns.wanted(), "case {case}");
             }
         }
     }

@@ -37,6 +37,8 @@ pub(crate) fn append_bodies<T: Real>(
     }
     assert_eq!(cols.boxes.len(), bodies.len(), "one box per body");
     let (ng, nb, slots) = (cols.groups.len() - 1, bodies.len(), cols.slots());
+    // A 1 the compiler cannot see (see `add_compensated`), then the origins.
+    real.push(T::from_f64(1.0));
     let origins_at = real.len();
     let work_at = origins_at + 2 * nb;
     let out_at = work_at + 7 * slots;

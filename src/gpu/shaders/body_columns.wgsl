@@ -7,7 +7,7 @@
 //            groups[5 ng] (first local column, columns, first slot, members' start, end),
 //            members[nb], bodies[4 nb] (first row, rows, anchor column, anchor row)];
 //   mv_real: the moving kernel's data (links: momentum of link l at 2m + l; PSM: of share s
-//            at n + 3m + 2s), then per body the arm of its anchor cell's centre from the
+//            at n + 3m + 2s), then 1 (at origins_at − 1), then per body the arm of its anchor cell's centre from the
 //            body's centre (2 reals at origins_at), per slot 7 reals of work at work_at
 //            (three sums, their three compensations, the count) and 4 at out_at (the three
 //            sums and the count, read back).
@@ -18,11 +18,13 @@
 // cells, so it has the same bits on any slab.
 
 // mv_real[at] (with its compensation at at + 3) += v: Knuth's TwoSum, so that an f32 run's
-// sums keep about twice f32's precision (the host sums in f64).
-fn add_compensated(at: u32, v: real) {
+// sums keep about twice f32's precision (the host sums in f64). `one` is 1 read from the
+// buffer: a compiler that may reassociate inexact arithmetic (Mesa's NIR does) cannot
+// prove (s + v) · one − s = v, so the error term is not folded away to 0.
+fn add_compensated(at: u32, v: real, one: real) {
     let s = mv_real[at];
     let t = s + v;
-    let z = t - s;
+    let z = t * one - s;
     mv_real[at + 3u] += (s - (t - z)) + (v - z);
     mv_real[at] = t;
 }
@@ -41,6 +43,7 @@ fn body_columns(grp: u32, psm: bool) {
     let origins_at = mv_idx[sec + 3u];
     let work_at = mv_idx[sec + 4u];
     let out_at = mv_idx[sec + 5u];
+    let one = mv_real[origins_at - 1u];
     let rows = sec + 6u;
     let groups = rows + ny + 1u;
     let members = groups + 5u * ng;
@@ -113,9 +116,9 @@ fn body_columns(grp: u32, psm: bool) {
                         arm_x = ax - real(0.5) * real(CX[i]);
                         arm_y = ay - real(0.5) * real(CY[i]);
                     }
-                    add_compensated(slot, px);
-                    add_compensated(slot + 1u, py);
-                    add_compensated(slot + 2u, arm_x * py - arm_y * px);
+                    add_compensated(slot, px, one);
+                    add_compensated(slot + 1u, py, one);
+                    add_compensated(slot + 2u, arm_x * py - arm_y * px, one);
                     mv_real[slot + 6u] += real(1.0);
                 }
             }

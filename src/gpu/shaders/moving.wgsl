@@ -2,7 +2,8 @@
 // moving surface recomputed after a sweep with their links bounced back, partially saturated
 // cells, and plain gathers and scatters of whole cells for the host's rules (rest fills,
 // refills, momenta, full halos). Bound as group 2:
-//   mv_idx  [n cells, n links or shares, cells[n], start[n + 1], links: body · 16 + dir]
+//   mv_idx  [n cells, n links or shares, cells[n], start[n + 1], links: body · 16 + dir,
+//            then (PSM, with per-body sums) each share's body, then body_columns.wgsl's section]
 //   mv_real links: [q[L], wall[L], momentum out[L]]
 //           PSM:   [B[n], b[S], u_x[S], u_y[S], momentum out[2S]]
 //           gather / scatter: [9 values per cell]
