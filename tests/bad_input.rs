@@ -219,16 +219,7 @@ fn blow_up_keeps_output(output_every: u64) {
     assert!(steps > 0 && steps < 5000);
     // The error names the step that went bad, counted from 1, as coupled runs do: the one
     // after the last good state, whose step count the summary gives.
-    let at: u64 = text
-        .split("unstable at step ")
-        .nth(1)
-        .unwrap()
-        .split(':')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
-    assert_eq!(at, steps + 1, "{text}");
+    assert_eq!(common::unstable_step(&text), steps + 1, "{text}");
     let pics = std::fs::read_dir(d.path().join("out/pictures"))
         .unwrap()
         .count() as u64;

@@ -328,16 +328,7 @@ fn coupled_run_that_blows_up_stops_with_the_step() {
         assert!(e.contains("grain 0"), "{e}");
         // The step that went bad, counted from 1 as the fluid's errors count it; its sweep
         // completed, so the run stopped in (and kept, for diagnosis) that step's state.
-        let at: u64 = e
-            .split("unstable at step ")
-            .nth(1)
-            .unwrap()
-            .split(':')
-            .next()
-            .unwrap()
-            .parse()
-            .unwrap();
-        assert_eq!(at, s.steps, "{scheme}: {e}");
+        assert_eq!(common::unstable_step(&e), s.steps, "{scheme}: {e}");
     }
 }
 

@@ -6,6 +6,7 @@
 //! components, density, full populations f = h + w, forces on every solid). After 500
 //! steps it must be ≤ 1e-5 in f32 and ≤ 1e-12 in f64.
 mod common;
+use common::gpu_parity::rel_diff;
 use common::{assert_checks_pass, root};
 use decomposition::SingleProcess;
 use grainflow::lbm::Real;
@@ -23,21 +24,6 @@ fn have_adapter(test: &str) -> bool {
         eprintln!("SKIPPED {test}: no GPU adapter (scripts/setup.sh installs Mesa lavapipe)");
     }
     found
-}
-
-/// max |a − b| / max |a|.
-fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let diff = a
-        .iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-    if scale == 0.0 {
-        diff
-    } else {
-        diff / scale
-    }
 }
 
 fn compare<T: Real>(scene_path: &str, steps: usize, tolerance: f64) {

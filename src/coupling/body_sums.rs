@@ -16,7 +16,7 @@
 //! (the image nearest to its midpoint) is the image that covers its cell. Otherwise the
 //! backend reports one momentum per link or share as before.
 
-use super::exchange::{Coupler, Unstable};
+use super::exchange::Coupler;
 use super::map::GrainView;
 use super::Scheme;
 
@@ -102,13 +102,8 @@ impl Coupler {
 
     /// The collect from the backend's per-group sums: each used slot is added to its
     /// grain's column sum (in group order; a grain's groups reach different columns). Checks
-    /// that the slots hold every link or share of the plan. Maps the first bad plan cell to
-    /// (cell, grain, density) as the per-link collects do.
-    pub(super) fn collect_bodies(
-        &mut self,
-        views: &[GrainView],
-        bad: Option<(usize, f64)>,
-    ) -> Option<Unstable> {
+    /// that the slots hold every link or share of the plan.
+    pub(super) fn collect_bodies(&mut self, views: &[GrainView]) {
         let f = self.frame;
         let cols = std::mem::take(&mut self.body_columns);
         let mut seen = 0usize;
@@ -136,18 +131,6 @@ impl Coupler {
             seen, planned,
             "the per-body sums must hold every link or share of the plan"
         );
-        bad.map(|(c, rho)| match self.scheme {
-            Scheme::Psm => {
-                let s = self.psm.start[c] as usize;
-                let image = self.psm.shares[s].body as usize;
-                (self.psm.cells[c] as usize, self.disk_images[image].0, rho)
-            }
-            _ => {
-                let l = self.links.start[c] as usize;
-                let body = self.links.links[l].body();
-                (self.links.cells[c] as usize, self.body_grain[body], rho)
-            }
-        })
     }
 }
 
@@ -249,7 +232,7 @@ mod tests {
                 assert!(links > 500, "case {case}: {links} links");
                 c.link_momentum = (0..links).map(|_| next(&mut seed) - 0.5).collect();
                 c.sums.reset(&views, f.global_nx);
-                c.collect_links(&views, None);
+                c.collect_links(&views);
                 let want = all_partials(&c.sums, views.len());
                 // The same from per-body sums.
                 c.box_bodies(&views, true);
@@ -267,7 +250,7 @@ mod tests {
                 backend_sums(&f, (&plan.rows, &plan.cells, &plan.start), load, &mut cols);
                 c.body_columns = cols;
                 c.sums.reset(&views, f.global_nx);
-                c.collect_bodies(&views, None);
+                c.collect_bodies(&views);
                 let got = all_partials(&c.sums, views.len());
                 assert_eq!(got.len(), want.len(), "case {case}");
                 assert!(got == want, "case {case}: the column sums differ");
@@ -276,7 +259,7 @@ mod tests {
                 c.body_columns.counts[slot] = 0;
                 let lost = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                     c.sums.reset(&views, f.global_nx);
-                    c.collect_bodies(&views, None)
+                    c.collect_bodies(&views)
                 }));
                 assert!(lost.is_err(), "case {case}: a lost link went unnoticed");
                 // A grain too large for its lattice's height: no sums wanted, the backend

@@ -332,15 +332,27 @@ impl Coupler {
     pub fn collect(&mut self, views: &[GrainView], bad: Option<(usize, f64)>) -> Option<Unstable> {
         let t = std::time::Instant::now();
         self.sums.reset(views, self.frame.global_nx);
-        let bad = if self.body_columns.made {
-            self.collect_bodies(views, bad)
+        if self.body_columns.made {
+            self.collect_bodies(views);
         } else if self.scheme == Scheme::Psm {
-            self.collect_psm(views, bad)
+            self.collect_psm(views);
         } else {
-            self.collect_links(views, bad)
-        };
+            self.collect_links(views);
+        }
         self.passes[super::pass::COLLECT] += t.elapsed().as_secs_f64();
-        bad
+        // The bad plan cell's grain: that of its first link or share.
+        bad.map(|(c, rho)| match self.scheme {
+            Scheme::Psm => {
+                let s = self.psm.start[c] as usize;
+                let image = self.psm.shares[s].body as usize;
+                (self.psm.cells[c] as usize, self.disk_images[image].0, rho)
+            }
+            _ => {
+                let l = self.links.start[c] as usize;
+                let body = self.links.links[l].body();
+                (self.links.cells[c] as usize, self.body_grain[body], rho)
+            }
+        })
     }
 
     /// Seconds this rank spent in each of [`super::PASSES`] so far.

@@ -1,7 +1,7 @@
 //! Bounce-back schemes: the fluid cells next to a grain (its *boundary*), the plan of their
 //! links to it, and the loads they hand to each grain.
 
-use super::exchange::{neighbour, Coupler, Unstable};
+use super::exchange::{neighbour, Coupler};
 use super::gather::Shared;
 use super::geometry::link_fraction;
 use super::map::{nearest_image_at, GrainView};
@@ -213,12 +213,7 @@ impl Coupler {
     /// Add each link's momentum (as the sweep reported it) to its grain's column sums, in
     /// plan order (in parallel over bands of columns): the grain receives −(f*_ī + f_i) c_i
     /// (seed eq. 5.47) at the link's midpoint (torque about the body's centre, eq. 5.48).
-    /// Maps the first bad plan cell to (cell, grain, density).
-    pub(super) fn collect_links(
-        &mut self,
-        views: &[GrainView],
-        bad: Option<(usize, f64)>,
-    ) -> Option<Unstable> {
+    pub(super) fn collect_links(&mut self, views: &[GrainView]) {
         let f = self.frame;
         // Each body's window of column sums (its grain's, seen from its image).
         let mut windows = std::mem::take(&mut self.body_windows);
@@ -251,11 +246,6 @@ impl Coupler {
             });
         });
         self.body_windows = windows;
-        bad.map(|(c, rho)| {
-            let l = self.links.start[c] as usize;
-            let body = self.links.links[l].body();
-            (self.links.cells[c] as usize, self.body_grain[body], rho)
-        })
     }
 }
 

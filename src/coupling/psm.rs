@@ -2,7 +2,7 @@
 //! grain overlaps is collided as a blend of the fluid's operator and the solid's, weighted by
 //! the exact solid fraction.
 
-use super::exchange::{Coupler, Unstable};
+use super::exchange::Coupler;
 use super::gather::{gather, group_by_row, row_of, Shared};
 use super::geometry::{box_lines, column_line, row_line, CellAreas};
 use super::map::{share_rows, shares_in_row, GrainView, Share};
@@ -217,13 +217,8 @@ impl Coupler {
     }
 
     /// Add each share's momentum (as the sweep reported it) to its grain's column sums, in
-    /// plan order (in parallel over bands of columns). Maps the first bad plan cell to
-    /// (cell, grain, density).
-    pub(super) fn collect_psm(
-        &mut self,
-        views: &[GrainView],
-        bad: Option<(usize, f64)>,
-    ) -> Option<Unstable> {
+    /// plan order (in parallel over bands of columns).
+    pub(super) fn collect_psm(&mut self, views: &[GrainView]) {
         let f = self.frame;
         // Each grain image's window of its grain's column sums.
         let mut windows = std::mem::take(&mut self.body_windows);
@@ -248,10 +243,5 @@ impl Coupler {
             });
         });
         self.body_windows = windows;
-        bad.map(|(c, rho)| {
-            let s = self.psm.start[c] as usize;
-            let image = self.psm.shares[s].body as usize;
-            (self.psm.cells[c] as usize, self.disk_images[image].0, rho)
-        })
     }
 }

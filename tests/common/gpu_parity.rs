@@ -8,6 +8,7 @@ use grainflow::simulation::Simulation;
 
 /// max |a − b| / max |a|.
 pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
     let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let diff = a
         .iter()

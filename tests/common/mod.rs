@@ -6,6 +6,15 @@ pub mod gpu_parity;
 use grainflow::run::{run, Precision, RunOptions, Status, Summary};
 use std::path::{Path, PathBuf};
 
+/// The step an instability error names ("unstable at step S: …").
+pub fn unstable_step(error: &str) -> u64 {
+    let after = error
+        .split("unstable at step ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no step in: {error}"));
+    after.split(':').next().unwrap().parse().unwrap()
+}
+
 /// Repository root.
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
