@@ -396,10 +396,16 @@ impl LbmDem {
         let (view_of, ids, remote) = (&self.view_of, &self.ids, &remote);
         let grain_total = |partials: &mut Vec<(u32, Load)>, i: usize| {
             let v = view_of[i] as usize;
-            sums.partials(v, partials);
             let id = ids[v];
             let from = remote.partition_point(|r| r.0 < id);
             let to = remote.partition_point(|r| r.0 <= id);
+            if from == to {
+                // All its columns here: added in window order when that is column order.
+                if let Some(t) = sums.total_in_order(v) {
+                    return t;
+                }
+            }
+            sums.partials(v, partials);
             partials.extend(remote[from..to].iter().map(|r| (r.1, r.2)));
             total(partials)
         };
