@@ -230,7 +230,7 @@ impl Coupler {
         let (plan, momentum) = (&self.psm, &self.share_momentum);
         let (disks, win) = (&self.disk_images, &windows);
         self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
-            f.band_cells(&plan.rows, &plan.cells, &band, |c, col, centre| {
+            f.band_cells_sorted(&plan.rows, &plan.cells, &band, |c, col, centre| {
                 for s in plan.start[c] as usize..plan.start[c + 1] as usize {
                     // Plan share s: its grain and the image it sees.
                     let (i, p) = (plan.shares[s].body as usize, momentum[s]);
