@@ -4,6 +4,7 @@
 
 mod body_columns;
 pub mod buffers;
+mod cells;
 pub mod context;
 pub mod fluid;
 mod moving;

@@ -3,23 +3,16 @@
 //! body and column there (`shaders/body_columns.wgsl`) in the order the host's collect uses
 //! (so the forces have the same bits on any rank count): what comes back is about a dozen
 //! loads per body, or one momentum per link or solid share when the caller asks for no
-//! sums. Rest fills, refills and cell momenta move
-//! whole cells between host and device through small gather and scatter kernels, so their
-//! arithmetic is the CPU backend's, to the bit.
+//! sums. Rest fills, refills and cell momenta move whole cells between host and device
+//! (`cells.rs`).
 
 use super::body_columns::{append_bodies, read_sums};
 use super::buffers::{job_groups, round16, shader_source};
 use super::fluid::GpuFluid;
-use crate::lbm::d2q9::Q;
 use crate::lbm::moving::PsmPlan;
-use crate::lbm::moving::{
-    equilibrium_at, momentum_of, refill_cell, refill_sources, BodyColumns, MovingCells, Refill,
-    RigidMotion,
-};
+use crate::lbm::moving::{BodyColumns, MovingCells, RigidMotion};
 use crate::lbm::Real;
-use decomposition::Comm;
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// Pipelines and buffers of the moving-surface kernels (made on first use).
 pub(crate) struct MovingDevice {
@@ -36,7 +29,7 @@ pub(crate) struct MovingDevice {
 
 /// Which moving kernel to run.
 #[derive(Clone, Copy)]
-enum Kernel {
+pub(super) enum Kernel {
     Links,
     Psm,
     BodyLinks,
@@ -115,7 +108,7 @@ impl<T: Real> GpuFluid<T> {
     /// real data `real` (uploaded first; the real buffer holds `scratch` more reals that
     /// the kernels write), the lattice bound as group `g`; submitted at once. Read the
     /// results back from the real buffer ([`GpuFluid::moving_real_buffer`]).
-    fn run_moving(
+    pub(super) fn run_moving(
         &mut self,
         kernels: &[(Kernel, usize)],
         g: usize,
@@ -207,7 +200,7 @@ impl<T: Real> GpuFluid<T> {
     }
 
     /// `count` reals of the moving real buffer from `first`.
-    fn moving_reals(&self, first: usize, count: usize) -> Vec<T> {
+    pub(super) fn moving_reals(&self, first: usize, count: usize) -> Vec<T> {
         let bytes = self.download(
             self.moving_real_buffer(),
             first * T::BYTES,
@@ -395,132 +388,5 @@ impl<T: Real> GpuFluid<T> {
                 self.moving_reals_and_bad(momenta.start, momenta.len())
             }
         }
-    }
-
-    /// The 9 populations of each of `cells` (padded) in the current state.
-    pub(crate) fn gather(&mut self, cells: &[u32]) -> Vec<T> {
-        if cells.is_empty() {
-            return Vec::new();
-        }
-        let cur = self.host_mut().cur;
-        let mut idx = vec![cells.len() as u32, 0];
-        idx.extend_from_slice(cells);
-        let zeros = vec![T::default(); Q * cells.len()];
-        self.run_moving(&[(Kernel::Gather, cells.len())], cur, &idx, &zeros, 0);
-        self.moving_reals(0, Q * cells.len())
-    }
-
-    /// Write the 9 populations of each of `cells` (padded) into the current state.
-    pub(crate) fn scatter(&mut self, cells: &[u32], values: &[T]) {
-        if cells.is_empty() {
-            return;
-        }
-        let dst_is_cur = self.host_mut().cur ^ 1;
-        let mut idx = vec![cells.len() as u32, 0];
-        idx.extend_from_slice(cells);
-        self.run_moving(
-            &[(Kernel::Scatter, cells.len())],
-            dst_is_cur,
-            &idx,
-            values,
-            0,
-        );
-    }
-
-    /// Rest fill (see [`crate::lbm::Lattice::set_rest`]): the same values, made on the host.
-    pub(crate) fn rest(&mut self, cells: &[u32], velocity: &[[f64; 2]]) {
-        let values: Vec<T> = velocity
-            .iter()
-            .flat_map(|&u| equilibrium_at(0.0, u).map(T::from_f64))
-            .collect();
-        self.scatter(cells, &values);
-    }
-
-    /// Cell momenta (see [`crate::lbm::Lattice::momentum_of_cells`]).
-    pub(crate) fn cell_momenta(&mut self, cells: &[u32], out: &mut Vec<[f64; 2]>) {
-        let v = self.gather(cells);
-        out.clear();
-        out.extend(v.chunks_exact(Q).map(|c| {
-            let h: [f64; Q] = std::array::from_fn(|i| c[i].to_f64());
-            momentum_of(&h)
-        }));
-    }
-
-    /// Refills (see [`crate::lbm::Lattice::apply_refills`]): the neighbours come from the
-    /// device, the values are made on the host with the CPU's arithmetic.
-    pub(crate) fn refills(&mut self, refills: &[Refill], momentum: &mut Vec<[f64; 2]>) {
-        momentum.clear();
-        if refills.is_empty() {
-            return;
-        }
-        let stride = self.host_mut().stride;
-        let mut sources: Vec<u32> = refills
-            .iter()
-            .flat_map(|r| refill_sources(r, stride))
-            .map(|k| k as u32)
-            .collect();
-        sources.sort_unstable();
-        sources.dedup();
-        let v = self.gather(&sources);
-        let at: HashMap<usize, usize> = sources
-            .iter()
-            .enumerate()
-            .map(|(j, &k)| (k as usize, j))
-            .collect();
-        let mut values = Vec::with_capacity(Q * refills.len());
-        for r in refills {
-            let h = refill_cell(r, stride, |m| {
-                let j = at[&m];
-                std::array::from_fn(|i| v[Q * j + i].to_f64())
-            });
-            let stored = h.map(T::from_f64);
-            values.extend_from_slice(&stored);
-            momentum.push(momentum_of(&stored.map(|x| x.to_f64())));
-        }
-        let cells: Vec<u32> = refills.iter().map(|r| r.cell).collect();
-        self.scatter(&cells, &values);
-    }
-
-    /// Whole neighbour cells in the halos (see
-    /// [`crate::lbm::FluidBackend::refresh_halos_full`]): the device's halo fills, then the
-    /// edge columns travel through the host's halo exchange.
-    pub(crate) fn halos_full(&mut self, comm: &dyn Comm) {
-        crate::lbm::FluidBackend::update_boundaries(self);
-        self.flush();
-        let host = self.host_mut();
-        let sides = host.exchanged_faces();
-        if sides == [false, false] {
-            return;
-        }
-        let (nx, ny, stride, plane, cur) = (host.nx, host.ny, host.stride, host.plane, host.cur);
-        // Padded columns of the exchanged sides: (edge, halo).
-        let columns: Vec<(usize, usize)> = [(1, 0), (nx, nx + 1)]
-            .into_iter()
-            .zip(sides)
-            .filter_map(|(c, on)| on.then_some(c))
-            .collect();
-        let cells = |pick: fn(&(usize, usize)) -> usize| -> Vec<u32> {
-            columns
-                .iter()
-                .flat_map(|c| (0..ny + 2).map(move |yp| (yp * stride + pick(c)) as u32))
-                .collect()
-        };
-        let edges = cells(|c| c.0);
-        let v = self.gather(&edges);
-        let host = self.host_mut();
-        for (j, &k) in edges.iter().enumerate() {
-            for i in 0..Q {
-                host.buf[cur][i * plane + k as usize] = v[Q * j + i];
-            }
-        }
-        host.refresh_exchange_full(comm);
-        let halos = cells(|c| c.1);
-        let host = self.host_mut();
-        let values: Vec<T> = halos
-            .iter()
-            .flat_map(|&k| (0..Q).map(move |i| (i, k)))
-            .map(|(i, k)| host.buf[cur][i * plane + k as usize])
-            .collect();
-        self.scatter(&halos, &values);
     }
 }
