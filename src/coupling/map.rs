@@ -134,6 +134,7 @@ impl SlabFrame {
         );
         for y in 0..rows.len().saturating_sub(1) {
             let row = &cells[rows[y] as usize..rows[y + 1] as usize];
+            debug_assert!(row.windows(2).all(|w| w[0] < w[1]), "row {y} is not sorted");
             // Padded indices of the band's first column and of the column after its last.
             let row0 = ((y + 1) * self.stride) as i64 + 1;
             let (ka, kb) = ((row0 + lo).max(0) as u32, (row0 + hi).max(0) as u32);

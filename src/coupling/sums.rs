@@ -227,9 +227,9 @@ impl Adder<'_> {
     }
 }
 
-/// Add `load` to a slot whose mark is `used`: the first load goes on 0.0 (not on what the
-/// slot held before its reset), so the sum has the bits of a sum from zero (0.0 + x is x
-/// except for x = −0.0, which gives +0.0, as it always did here).
+/// Add `load` to the slot `s` with its mark `used` (set here): the first load goes on 0.0
+/// (not on what the slot held before its reset), so the sum has the bits of a sum from zero
+/// (0.0 + x is x except for x = −0.0, which gives +0.0, as it always did here).
 #[inline(always)]
 fn accumulate(s: &mut Load, used: &mut bool, load: Load) {
     if *used {
@@ -312,36 +312,46 @@ mod tests {
         assert_eq!(whole.map(f64::to_bits), split.map(f64::to_bits));
     }
 
-    /// A grain's total added in window order is the sorted partials' total, to the bit;
-    /// a window that wraps around the periodic face is left to the sort.
+    /// A grain's total added in window order is the sorted partials' total, to the bit,
+    /// with stale sums from before the reset in the unused slots; a window that wraps
+    /// around the periodic face is left to the sort.
     #[test]
     fn in_order_total_matches_the_sorted_total() {
-        // Windows at the left face (wraps), inside, and at the right face (wraps).
+        // Windows across the left face (x = 1), starting at column 0 (x = 7: the first
+        // that does not wrap), inside, ending at column 99 (x = 93) and across the right
+        // face (x = 98.5).
         let gs: Vec<GrainView> = [1.0, 7.0, 30.0, 55.0, 93.0, 98.5]
             .into_iter()
             .map(grain)
             .collect();
-        let mut s = ColumnSums::default();
-        s.reset(&gs, 100);
-        for k in 0..600 {
-            let g = (k * 7) % gs.len();
-            let c = gs[g].centre[0].floor() as i64 - 6 + (k % 13) as i64;
-            // Skip one column per grain, so unused slots sit between used ones.
-            if c == gs[g].centre[0].floor() as i64 + 1 {
-                continue;
+        // Loads on columns around each grain; with `skip`, none on the column right of
+        // its centre, so an unused slot sits between used ones.
+        let fill = |s: &mut ColumnSums, skip: bool, scale: f64| {
+            s.reset(&gs, 100);
+            for k in 0..600 {
+                let g = (k * 7) % gs.len();
+                let c = gs[g].centre[0].floor() as i64 - 6 + (k % 13) as i64;
+                if skip && c == gs[g].centre[0].floor() as i64 + 1 {
+                    continue;
+                }
+                let v = scale / (k as f64 + 0.3);
+                // A column across the face belongs to the image shifted by the width.
+                let x = gs[g].centre[0];
+                let image = x - 100.0 * c.div_euclid(100) as f64;
+                s.add(
+                    g,
+                    x,
+                    image,
+                    c.rem_euclid(100) as usize,
+                    [v, -3.3 * v, v * v],
+                );
             }
-            let v = 1.0 / (k as f64 + 0.3);
-            // A column across the face belongs to the image shifted by the lattice width.
-            let x = gs[g].centre[0];
-            let image = x - 100.0 * c.div_euclid(100) as f64;
-            s.add(
-                g,
-                x,
-                image,
-                c.rem_euclid(100) as usize,
-                [v, -3.3 * v, v * v],
-            );
-        }
+        };
+        // Every slot filled first, then reset and refilled: the skipped slots keep stale
+        // sums that an unmarked read would add.
+        let mut s = ColumnSums::default();
+        fill(&mut s, false, 7.0);
+        fill(&mut s, true, 1.0);
         let mut p = Vec::new();
         let mut in_order = 0;
         for g in 0..gs.len() {
