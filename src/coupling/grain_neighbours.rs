@@ -2,6 +2,7 @@
 //! move, can reach its own, found on a grid of buckets (`cover_update.rs` needs them).
 
 use super::map::{GrainView, SlabFrame};
+use rayon::prelude::*;
 
 /// Each grain's possible neighbours, and the grid that finds them (kept for its
 /// allocations).
@@ -14,6 +15,8 @@ pub struct GrainNeighbours {
     /// Grains sorted by grid bucket, and each bucket's start in that list.
     by_bucket: Vec<u32>,
     bucket_start: Vec<u32>,
+    /// Per task of the parallel search: its grains' neighbours and their counts.
+    parts: Vec<(Vec<u32>, Vec<u32>)>,
 }
 
 impl GrainNeighbours {
@@ -86,12 +89,13 @@ impl GrainNeighbours {
             self.bucket_start[b] = self.bucket_start[b - 1];
         }
         self.bucket_start[0] = 0;
-        self.start.clear();
-        self.near.clear();
-        self.start.push(0);
-        for (g, v) in new.iter().enumerate() {
+        // Each grain's neighbours, in parallel over ranges of grains (each list is the
+        // grain's own, sorted, so the result does not depend on the ranges).
+        let (by_bucket, bucket_start) = (&self.by_bucket, &self.bucket_start);
+        let neighbours_of = |g: usize, out: &mut Vec<u32>| {
+            let v = &new[g];
             let (bx, by) = (bucket_axis(0, v.centre[0]), bucket_axis(1, v.centre[1]));
-            let from = self.near.len();
+            let from = out.len();
             for j in around(by, count[1], periodic[1]) {
                 if j == usize::MAX {
                     continue;
@@ -101,9 +105,7 @@ impl GrainNeighbours {
                         continue;
                     }
                     let b = j * count[0] + i;
-                    for &h in &self.by_bucket
-                        [self.bucket_start[b] as usize..self.bucket_start[b + 1] as usize]
-                    {
+                    for &h in &by_bucket[bucket_start[b] as usize..bucket_start[b + 1] as usize] {
                         if h as usize == g {
                             continue;
                         }
@@ -120,13 +122,40 @@ impl GrainNeighbours {
                             + moved(&old[h as usize], w)
                             + 1e-6;
                         if d[0] * d[0] + d[1] * d[1] < limit * limit {
-                            self.near.push(h);
+                            out.push(h);
                         }
                     }
                 }
             }
-            self.near[from..].sort_unstable();
-            self.start.push(self.near.len() as u32);
+            out[from..].sort_unstable();
+        };
+        let tasks = if n >= 512 {
+            rayon::current_num_threads().clamp(1, 64)
+        } else {
+            1
+        };
+        self.parts.resize_with(tasks, Default::default);
+        self.parts
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(t, (near, lens))| {
+                near.clear();
+                lens.clear();
+                for g in n * t / tasks..n * (t + 1) / tasks {
+                    let before = near.len();
+                    neighbours_of(g, near);
+                    lens.push((near.len() - before) as u32);
+                }
+            });
+        self.start.clear();
+        self.near.clear();
+        self.start.push(0);
+        for (near, lens) in &self.parts[..tasks] {
+            self.near.extend_from_slice(near);
+            for &l in lens {
+                let last = *self.start.last().expect("starts with 0");
+                self.start.push(last + l);
+            }
         }
     }
 }
@@ -156,4 +185,78 @@ fn around(i: usize, count: usize, periodic: bool) -> [usize; 3] {
         }
     }
     v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::coupling::test_slabs::{next, slab};
+
+    /// Every pair whose disks may overlap before or after the move is listed, and no other
+    /// (against a brute-force search with nearest images), the same lists on 1, 2 and 5
+    /// threads, on slabs periodic on both axes and on none.
+    #[test]
+    fn neighbours_match_a_brute_force_search_on_any_thread_count() {
+        let mut seed = 0x853c_49e6_748f_ea9bu64;
+        for case in [0, 1] {
+            let (f, _) = slab(case);
+            let (lx, ly) = (f.global_nx as f64, f.ny as f64);
+            let old: Vec<GrainView> = (0..700)
+                .map(|_| GrainView {
+                    centre: [next(&mut seed) * lx, next(&mut seed) * ly],
+                    radius: 2.0 + 4.0 * next(&mut seed),
+                    velocity: [0.0; 2],
+                    omega: 0.0,
+                })
+                .collect();
+            let new: Vec<GrainView> = old
+                .iter()
+                .map(|g| GrainView {
+                    centre: [
+                        g.centre[0] + next(&mut seed) - 0.5,
+                        g.centre[1] + next(&mut seed) - 0.5,
+                    ],
+                    ..*g
+                })
+                .collect();
+            let reach = 2.0 * 6.0 + 2.0 * 0.75 + 0.5;
+            let lists: Vec<Vec<Vec<u32>>> = [1, 2, 5]
+                .into_iter()
+                .map(|threads| {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .expect("pool");
+                    let mut nb = GrainNeighbours::default();
+                    pool.install(|| nb.find(&f, &old, &new, reach));
+                    (0..new.len()).map(|g| nb.of(g).to_vec()).collect()
+                })
+                .collect();
+            assert_eq!(lists[0], lists[1], "slab {case}: 1 and 2 threads");
+            assert_eq!(lists[0], lists[2], "slab {case}: 1 and 5 threads");
+            let mut pairs = 0;
+            for (g, v) in new.iter().enumerate() {
+                let want: Vec<u32> = (0..new.len())
+                    .filter(|&h| h != g)
+                    .filter(|&h| {
+                        let w = &new[h];
+                        let mut d = [w.centre[0] - v.centre[0], w.centre[1] - v.centre[1]];
+                        for (a, l) in [(0, lx), (1, ly)] {
+                            let periodic = [f.periodic_x, f.periodic_y][a];
+                            if periodic {
+                                d[a] -= (d[a] / l).round() * l;
+                            }
+                        }
+                        let limit =
+                            v.radius + w.radius + moved(&old[g], v) + moved(&old[h], w) + 1e-6;
+                        d[0] * d[0] + d[1] * d[1] < limit * limit
+                    })
+                    .map(|h| h as u32)
+                    .collect();
+                pairs += want.len();
+                assert_eq!(lists[0][g], want, "slab {case}, grain {g}");
+            }
+            assert!(pairs > 1000, "slab {case}: only {pairs} pairs");
+        }
+    }
 }
