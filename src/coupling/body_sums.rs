@@ -137,10 +137,9 @@ impl Coupler {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::coupling::map::{cover, SlabFrame};
+    use crate::coupling::map::SlabFrame;
     use crate::coupling::sums::ColumnSums;
-    use crate::coupling::test_slabs::{next, slab};
-    use crate::coupling::Refill;
+    use crate::coupling::test_slabs::{grains_at_rest, next, planned, slab};
     use crate::lbm::d2q9::{CX, CY};
     use crate::lbm::moving::BodyColumns;
 
@@ -209,25 +208,8 @@ mod tests {
             for scheme in [Scheme::BounceBack, Scheme::Interpolated] {
                 let (f, solid) = slab(case);
                 let fluid = |k: usize| !solid[k];
-                let views: Vec<GrainView> = (0..30)
-                    .map(|_| GrainView {
-                        centre: [
-                            f.x0 as f64 - 6.0 + next(&mut seed) * (f.nx as f64 + 12.0),
-                            -3.0 + next(&mut seed) * 66.0,
-                        ],
-                        radius: 2.0 + 4.0 * next(&mut seed),
-                        velocity: [0.0; 2],
-                        omega: 0.0,
-                    })
-                    .collect();
-                let ids: Vec<u64> = (0..views.len() as u64).collect();
-                let mut c = Coupler::new(scheme, Refill::default(), f);
-                let (mut touched, mut inner) = (Vec::new(), Vec::new());
-                cover(&f, &views, fluid, &mut c.owner, &mut touched, &mut inner);
-                c.lists.clear();
-                c.lists.follow(&ids);
-                c.group_lists(&fluid, &views);
-                c.plan_links(&views);
+                let views = grains_at_rest(&f, 30, &mut seed);
+                let mut c = planned(scheme, f, &views, &fluid);
                 let links = c.links.links.len();
                 assert!(links > 500, "case {case}: {links} links");
                 c.link_momentum = (0..links).map(|_| next(&mut seed) - 0.5).collect();

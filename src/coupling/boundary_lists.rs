@@ -240,7 +240,7 @@ mod tests {
     use super::*;
     use crate::coupling::cover_update::CoverUpdate;
     use crate::coupling::map::cover;
-    use crate::coupling::test_slabs::{next, slab};
+    use crate::coupling::test_slabs::{grains_at_rest, next, slab};
 
     /// Over many remaps of crowded, touching, moving grains (some leaving and entering the
     /// view, some crossing the slab's faces and periodic seams, next to solid cells), the
@@ -254,17 +254,7 @@ mod tests {
             let cells = solid.len();
             let fluid = |k: usize| !solid[k];
             // Grains with ids 0..40; a few drift fast, the rest barely move.
-            let mut all: Vec<GrainView> = (0..40)
-                .map(|_| GrainView {
-                    centre: [
-                        f.x0 as f64 - 6.0 + next(&mut seed) * (f.nx as f64 + 12.0),
-                        -3.0 + next(&mut seed) * 66.0,
-                    ],
-                    radius: 2.0 + 4.0 * next(&mut seed),
-                    velocity: [0.0; 2],
-                    omega: 0.0,
-                })
-                .collect();
+            let mut all = grains_at_rest(&f, 40, &mut seed);
             let step: Vec<[f64; 2]> = (0..40)
                 .map(|n| {
                     let s = if n % 5 == 0 { 0.4 } else { 0.02 };

@@ -129,6 +129,7 @@ impl GrainNeighbours {
             }
             out[from..].sort_unstable();
         };
+        // Few grains: one task (waking the pool would cost more than their search).
         let tasks = if n >= 512 {
             rayon::current_num_threads().clamp(1, 64)
         } else {

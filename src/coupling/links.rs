@@ -263,9 +263,8 @@ fn link_image(f: &super::map::SlabFrame, centre: [f64; 2], i: usize, grain: &Gra
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::coupling::map::{cover, nearest_image, NONE};
-    use crate::coupling::test_slabs::{next, slab};
-    use crate::coupling::Refill;
+    use crate::coupling::map::{nearest_image, NONE};
+    use crate::coupling::test_slabs::{next, planned, slab};
     use crate::lbm::d2q9::{Q, W};
 
     /// Every planned link names the grain that covers the cell it comes from, and its wall
@@ -291,7 +290,6 @@ mod tests {
                         omega: 0.2 * (next(&mut seed) - 0.5),
                     })
                     .collect();
-                let ids: Vec<u64> = (0..views.len() as u64).collect();
                 // The plan built on 1, 2 and 5 threads: the same, slot for slot.
                 let plans: Vec<Coupler> = [1, 2, 5]
                     .into_iter()
@@ -300,16 +298,7 @@ mod tests {
                             .num_threads(threads)
                             .build()
                             .unwrap();
-                        pool.install(|| {
-                            let mut c = Coupler::new(scheme, Refill::default(), f);
-                            let (mut touched, mut inner) = (Vec::new(), Vec::new());
-                            cover(&f, &views, fluid, &mut c.owner, &mut touched, &mut inner);
-                            c.lists.clear();
-                            c.lists.follow(&ids);
-                            c.group_lists(&fluid, &views);
-                            c.plan_links(&views);
-                            c
-                        })
+                        pool.install(|| planned(scheme, f, &views, &fluid))
                     })
                     .collect();
                 for other in &plans[1..] {
