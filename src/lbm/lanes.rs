@@ -82,6 +82,31 @@ impl<T: Real, const N: usize> Neg for Lanes<T, N> {
     }
 }
 
+impl<T: Real, const N: usize> Lanes<T, N> {
+    /// Lane l of `a` where bit l of `mask` is set, of `b` elsewhere (one masked blend: no
+    /// lane is written alone, so the values stay in a register).
+    #[inline(always)]
+    pub fn select(mask: u32, a: Self, b: Self) -> Self {
+        Lanes(std::array::from_fn(|l| {
+            if mask >> l & 1 != 0 {
+                a.0[l]
+            } else {
+                b.0[l]
+            }
+        }))
+    }
+
+    /// Bit l set where lane l is greater than `v` (clear for NaN).
+    #[inline(always)]
+    pub fn greater_mask(self, v: T) -> u32 {
+        let mut mask = 0;
+        for l in 0..N {
+            mask |= u32::from(self.0[l] > v) << l;
+        }
+        mask
+    }
+}
+
 impl<T: Real, const N: usize> Simd for Lanes<T, N> {
     type Scalar = T;
     #[inline(always)]
@@ -143,5 +168,25 @@ pub(crate) fn prefetch_ahead<T>(streams: &[*const T; Q], k: usize) {
                 ahead as *const i8,
             )
         };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Lanes;
+
+    #[test]
+    fn select_takes_the_masked_lanes_and_greater_mask_clears_nan() {
+        let a = Lanes([1.0f32, 2.0, 3.0, 4.0]);
+        let b = Lanes([-1.0f32, -0.0, f32::NAN, 0.5]);
+        let s = Lanes::select(0b1010, a, b);
+        assert_eq!(s.0[0].to_bits(), (-1.0f32).to_bits());
+        assert_eq!(s.0[1], 2.0);
+        assert!(s.0[2].is_nan());
+        assert_eq!(s.0[3], 4.0);
+        // -0.0 kept as it is: a lane not selected is not rewritten.
+        assert_eq!(Lanes::select(0, a, b).0[1].to_bits(), (-0.0f32).to_bits());
+        assert_eq!(b.greater_mask(0.0), 0b1000);
+        assert_eq!(a.greater_mask(2.5), 0b1100);
     }
 }

@@ -177,7 +177,9 @@ impl<'a> PartialSweep<'a> {
     /// `L` cells from padded index `k`), those of the plan cells `cells` (which lie among
     /// them) by the cells' new values, recording the first bad one. Cells of one share are
     /// blended in lanes, with the operations of [`blend_partial`] in the same order (the
-    /// same bits); a chunk that holds a cell of several shares goes lane by lane.
+    /// same bits), and merged into `post` by a lane mask (a lane written alone would send
+    /// the whole chunk through memory); a chunk that holds a cell of several shares goes
+    /// lane by lane.
     ///
     /// # Safety
     /// The momentum slots of the cells' shares belong to the caller.
@@ -196,58 +198,81 @@ impl<'a> PartialSweep<'a> {
         let y = PsmPlan::row_of(self.stride, k);
         // The lanes that hold no plan cell get weight 0 and are not written back.
         let zero = T::default();
-        let (mut b_total, mut b, mut ux, mut uy) = ([zero; L], [zero; L], [zero; L], [zero; L]);
-        let mut single = true;
+        let mut b_total = Lanes([zero; L]);
+        let (mut b, mut ux, mut uy) = (b_total, b_total, b_total);
+        let mut mask = 0u32;
         for n in cells.clone() {
             let at = plan.start[n] as usize;
             if plan.start[n + 1] as usize != at + 1 {
-                single = false;
-                break;
+                *post = self.blend_each(cells, k, *h, *post, *m);
+                return;
             }
-            let (l, share) = (lane(n), plan.shares[at]);
+            let (bit, share) = (1 << lane(n), plan.shares[at]);
             let u = plan.velocity(self.stride, plan.cells[n] as usize, y, share);
-            b_total[l] = T::from_f64(plan.total[n]);
-            b[l] = T::from_f64(share.b);
-            ux[l] = T::from_f64(u[0]);
-            uy[l] = T::from_f64(u[1]);
-        }
-        if !single {
-            for n in cells {
-                let l = lane(n);
-                let pick = |v: &[Lanes<T, L>; Q]| -> [T; Q] { std::array::from_fn(|i| v[i].0[l]) };
-                let mut one = pick(post);
-                let ml = Moments {
-                    drho: m.drho.0[l],
-                    rho: m.rho.0[l],
-                    ux: m.ux.0[l],
-                    uy: m.uy.0[l],
-                };
-                self.blend(n, &pick(h), &mut one, &ml);
-                for (i, v) in one.into_iter().enumerate() {
-                    post[i].0[l] = v;
-                }
-            }
-            return;
+            // Each value into its lane by a masked blend, in registers.
+            let put = |v: &mut Lanes<T, L>, x: f64| {
+                *v = Lanes::select(bit, Lanes::splat(T::from_f64(x)), *v)
+            };
+            put(&mut b_total, plan.total[n]);
+            put(&mut b, share.b);
+            put(&mut ux, u[0]);
+            put(&mut uy, u[1]);
+            mask |= bit;
         }
         let eq_fluid = equilibrium(m);
-        let mut new = fluid_part(post, Lanes(b_total));
-        let p = add_share(&mut new, h, &eq_fluid, m, Lanes(b), [Lanes(ux), Lanes(uy)]);
+        let mut new = fluid_part(post, b_total);
+        let p = add_share(&mut new, h, &eq_fluid, m, b, [ux, uy]);
         let mut sum = Lanes([T::from_f64(-0.0); L]);
         for v in &new {
             sum = sum + *v;
         }
+        let ok = (Lanes([T::from_f64(1.0); L]) + sum).greater_mask(zero);
+        for (i, v) in new.into_iter().enumerate() {
+            post[i] = Lanes::select(mask, v, post[i]);
+        }
         for n in cells {
             let l = lane(n);
-            for i in 0..Q {
-                post[i].0[l] = new[i].0[l];
-            }
             let at = plan.start[n] as usize;
             self.mom
                 .write(at, [-p[0].0[l].to_f64(), -p[1].0[l].to_f64()]);
-            if !(T::from_f64(1.0) + sum.0[l] > zero) {
+            if ok >> l & 1 == 0 {
                 self.bad.fetch_min(n, Ordering::Relaxed);
             }
         }
+    }
+
+    /// [`Self::blend_lanes`] for a chunk that holds a cell of several shares: each plan
+    /// cell of `cells` in turn, as [`Self::blend`]; returns the new `post`. Out of line
+    /// and by value, so that the common path's lanes need no address.
+    ///
+    /// # Safety
+    /// As [`Self::blend_lanes`].
+    #[cold]
+    #[inline(never)]
+    unsafe fn blend_each<T: Real, const L: usize>(
+        &self,
+        cells: std::ops::Range<usize>,
+        k: usize,
+        h: [Lanes<T, L>; Q],
+        mut post: [Lanes<T, L>; Q],
+        m: Moments<Lanes<T, L>>,
+    ) -> [Lanes<T, L>; Q] {
+        for n in cells {
+            let l = self.plan.cells[n] as usize - k;
+            let pick = |v: &[Lanes<T, L>; Q]| -> [T; Q] { std::array::from_fn(|i| v[i].0[l]) };
+            let mut one = pick(&post);
+            let ml = Moments {
+                drho: m.drho.0[l],
+                rho: m.rho.0[l],
+                ux: m.ux.0[l],
+                uy: m.uy.0[l],
+            };
+            self.blend(n, &pick(&h), &mut one, &ml);
+            for (i, v) in one.into_iter().enumerate() {
+                post[i].0[l] = v;
+            }
+        }
+        post
     }
 
     /// Replace `post`, plan cell `n`'s fluid collision of `h` (moments `m`), by the
