@@ -198,8 +198,7 @@ impl<'a> PartialSweep<'a> {
         let y = PsmPlan::row_of(self.stride, k);
         // The lanes that hold no plan cell get weight 0 and are not written back.
         let zero = T::default();
-        let mut b_total = Lanes([zero; L]);
-        let (mut b, mut ux, mut uy) = (b_total, b_total, b_total);
+        let (mut b_total, mut b, mut ux, mut uy) = ([zero; L], [zero; L], [zero; L], [zero; L]);
         let mut mask = 0u32;
         for n in cells.clone() {
             let at = plan.start[n] as usize;
@@ -207,21 +206,19 @@ impl<'a> PartialSweep<'a> {
                 *post = self.blend_each(cells, k, *h, *post, *m);
                 return;
             }
-            let (bit, share) = (1 << lane(n), plan.shares[at]);
+            let (l, share) = (lane(n), plan.shares[at]);
             let u = plan.velocity(self.stride, plan.cells[n] as usize, y, share);
-            // Each value into its lane by a masked blend, in registers.
-            let put = |v: &mut Lanes<T, L>, x: f64| {
-                *v = Lanes::select(bit, Lanes::splat(T::from_f64(x)), *v)
-            };
-            put(&mut b_total, plan.total[n]);
-            put(&mut b, share.b);
-            put(&mut ux, u[0]);
-            put(&mut uy, u[1]);
-            mask |= bit;
+            // Stored lane by lane, loaded once per chunk (a masked blend per value and cell
+            // compiles to a longer shuffle chain).
+            b_total[l] = T::from_f64(plan.total[n]);
+            b[l] = T::from_f64(share.b);
+            ux[l] = T::from_f64(u[0]);
+            uy[l] = T::from_f64(u[1]);
+            mask |= 1 << l;
         }
         let eq_fluid = equilibrium(m);
-        let mut new = fluid_part(post, b_total);
-        let p = add_share(&mut new, h, &eq_fluid, m, b, [ux, uy]);
+        let mut new = fluid_part(post, Lanes(b_total));
+        let p = add_share(&mut new, h, &eq_fluid, m, Lanes(b), [Lanes(ux), Lanes(uy)]);
         let mut sum = Lanes([T::from_f64(-0.0); L]);
         for v in &new {
             sum = sum + *v;
