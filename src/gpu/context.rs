@@ -175,6 +175,19 @@ impl GpuContext {
 
     /// Copy `bytes` bytes at the start of `buffer` (a MAP_READ buffer) to the host.
     pub fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+        let mut out = Vec::new();
+        self.read_into(buffer, bytes, &mut out)?;
+        Ok(out)
+    }
+
+    /// As [`Self::read`], into `out` (cleared first; its allocation is kept, so a read
+    /// every step allocates nothing once `out` has grown).
+    pub fn read_into(
+        &self,
+        buffer: &wgpu::Buffer,
+        bytes: u64,
+        out: &mut Vec<u8>,
+    ) -> Result<(), GpuError> {
         let slice = buffer.slice(..bytes);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -184,12 +197,14 @@ impl GpuContext {
         rx.recv()
             .map_err(|e| GpuError::Map(e.to_string()))?
             .map_err(|e| GpuError::Map(e.to_string()))?;
-        let out = slice
-            .get_mapped_range()
-            .map_err(|e| GpuError::Map(e.to_string()))?
-            .to_vec();
+        out.clear();
+        out.extend_from_slice(
+            &slice
+                .get_mapped_range()
+                .map_err(|e| GpuError::Map(e.to_string()))?,
+        );
         buffer.unmap();
-        Ok(out)
+        Ok(())
     }
 }
 

@@ -97,6 +97,9 @@ pub struct GpuFluid<T: Real> {
     pub(super) moving_idx: Vec<u32>,
     /// The moving kernels' real upload of the last step (kept for its allocation).
     pub(super) moving_real: Vec<T>,
+    /// The per-step read-back's bytes and values (kept for their allocations).
+    pub(super) read_bytes: Vec<u8>,
+    pub(super) read_values: Vec<T>,
     pending_steps: usize,
 }
 

@@ -209,14 +209,20 @@ impl<T: Real> GpuFluid<T> {
         super::fluid::from_bytes(&bytes)
     }
 
-    /// `count` reals of the moving real buffer from `first`, and the first bad plan cell of
-    /// the kernel that wrote them (resetting the flag): one read-back, so one wait for the
-    /// device per step.
-    fn moving_reals_and_bad(&self, first: usize, count: usize) -> (Vec<T>, Option<usize>) {
+    /// `count` reals of the moving real buffer from `first`, into `values` (cleared first),
+    /// and the first bad plan cell of the kernel that wrote them (resetting the flag): one
+    /// read-back, so one wait for the device per step, through buffers kept between steps.
+    fn moving_reals_and_bad(
+        &mut self,
+        first: usize,
+        count: usize,
+        values: &mut Vec<T>,
+    ) -> Option<usize> {
         let rbuf = self.moving_real_buffer();
         let bytes = count * T::BYTES;
         let at = bytes.div_ceil(4) * 4;
-        let (values, flag) = if at + 4 <= self.readback.size() as usize {
+        values.clear();
+        let flag = if at + 4 <= self.readback.size() as usize {
             let mut enc = self.ctx.device.create_command_encoder(&Default::default());
             if at > 0 {
                 enc.copy_buffer_to_buffer(
@@ -229,24 +235,24 @@ impl<T: Real> GpuFluid<T> {
             }
             enc.copy_buffer_to_buffer(&self.bad_buf, 12, &self.readback, at as u64, 4);
             self.ctx.queue.submit([enc.finish()]);
-            let data = self
-                .ctx
-                .read(&self.readback, (at + 4) as u64)
+            let mut data = std::mem::take(&mut self.read_bytes);
+            self.ctx
+                .read_into(&self.readback, (at + 4) as u64, &mut data)
                 .unwrap_or_else(|e| panic!("{e}: the GPU device was lost"));
             let flag = u32::from_le_bytes(data[at..at + 4].try_into().expect("4 bytes"));
-            (super::fluid::from_bytes(&data[..bytes]), flag)
+            values.extend(data[..bytes].chunks_exact(T::BYTES).map(T::get_le));
+            self.read_bytes = data;
+            flag
         } else {
-            let values = super::fluid::from_bytes(&self.download(rbuf, first * T::BYTES, bytes));
+            let data = self.download(rbuf, first * T::BYTES, bytes);
+            values.extend(data.chunks_exact(T::BYTES).map(T::get_le));
             let v = self.download(&self.bad_buf, 12, 4);
-            (
-                values,
-                u32::from_le_bytes(v[0..4].try_into().expect("4 bytes")),
-            )
+            u32::from_le_bytes(v[0..4].try_into().expect("4 bytes"))
         };
         self.ctx
             .queue
             .write_buffer(&self.bad_buf, 12, bytemuck::bytes_of(&u32::MAX));
-        (values, (flag != u32::MAX).then_some(flag as usize))
+        (flag != u32::MAX).then_some(flag as usize)
     }
 
     /// Recompute the cells of `moving` right after the sweep (the lattice group whose source
@@ -379,13 +385,17 @@ impl<T: Real> GpuFluid<T> {
         match append_bodies(idx, real, sums, rows, bodies, x0, ny) {
             Some(b) => {
                 self.run_moving(&[(kernel, n), (body, b.groups)], g, idx, real, b.scratch);
-                let (values, bad) = self.moving_reals_and_bad(b.out_at, 4 * b.slots);
+                let mut values = std::mem::take(&mut self.read_values);
+                let bad = self.moving_reals_and_bad(b.out_at, 4 * b.slots, &mut values);
                 read_sums(&values, sums);
+                self.read_values = values;
                 (Vec::new(), bad)
             }
             None => {
                 self.run_moving(&[(kernel, n)], g, idx, real, 0);
-                self.moving_reals_and_bad(momenta.start, momenta.len())
+                let mut values = Vec::new();
+                let bad = self.moving_reals_and_bad(momenta.start, momenta.len(), &mut values);
+                (values, bad)
             }
         }
     }

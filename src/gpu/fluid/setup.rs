@@ -290,6 +290,8 @@ impl<T: Real> GpuFluid<T> {
             moving: None,
             moving_idx: Vec::new(),
             moving_real: Vec::new(),
+            read_bytes: Vec::new(),
+            read_values: Vec::new(),
         };
         gpu.upload();
         Ok(gpu)
