@@ -15,7 +15,11 @@ use crate::scene::GpuStorage;
 use decomposition::{Comm, Side};
 use std::sync::Arc;
 
+mod halo;
 mod setup;
+mod transfer;
+
+pub(super) use transfer::{from_bytes, to_bytes};
 
 /// Uniform block of the kernels (`Geo` in shaders/common.wgsl).
 #[repr(C)]
@@ -103,95 +107,10 @@ pub struct GpuFluid<T: Real> {
     pending_steps: usize,
 }
 
-pub(super) fn to_bytes<T: Real>(values: &[T]) -> Vec<u8> {
-    let mut out = vec![0u8; values.len() * T::BYTES];
-    for (v, b) in values.iter().zip(out.chunks_exact_mut(T::BYTES)) {
-        v.put_le(b);
-    }
-    out
-}
-
-pub(super) fn from_bytes<T: Real>(bytes: &[u8]) -> Vec<T> {
-    bytes.chunks_exact(T::BYTES).map(T::get_le).collect()
-}
-
 impl<T: Real> GpuFluid<T> {
-    /// Copy both host population buffers to the device (start and restart).
-    fn upload(&mut self) {
-        let per = self.split.planes_per_part() * self.host.plane;
-        for b in 0..2 {
-            // Device buffer c holds host buffer c (host and device agree on `cur`).
-            for (j, buf) in self.pops[b].iter().enumerate() {
-                let values = &self.host.buf[b][j * per..(j + 1) * per];
-                self.ctx
-                    .queue
-                    .write_buffer(buf, 0, &self.pops_to_bytes(values));
-            }
-        }
-        self.ctx.queue.submit([]);
-    }
-
-    /// Copy device buffer `b` to the host's buffer `b`.
-    fn pull(&mut self, b: usize) {
-        self.flush();
-        let per = self.split.planes_per_part() * self.host.plane;
-        for j in 0..self.split.parts {
-            let bytes = per * if self.f16 { 2 } else { T::BYTES };
-            let v = self.pops_from_bytes(&self.download(&self.pops[b][j], 0, bytes));
-            self.host.buf[b][j * per..(j + 1) * per].copy_from_slice(&v);
-        }
-    }
-
     /// The host lattice (geometry; populations only after a pull).
     pub(crate) fn host_mut(&mut self) -> &mut Lattice<T> {
         &mut self.host
-    }
-
-    /// Populations as the device stores them.
-    fn pops_to_bytes(&self, values: &[T]) -> Vec<u8> {
-        if !self.f16 {
-            return to_bytes(values);
-        }
-        values
-            .iter()
-            .flat_map(|v| half::f16::from_f64(v.to_f64()).to_le_bytes())
-            .collect()
-    }
-
-    /// Inverse of [`GpuFluid::pops_to_bytes`].
-    fn pops_from_bytes(&self, bytes: &[u8]) -> Vec<T> {
-        if !self.f16 {
-            return from_bytes(bytes);
-        }
-        bytes
-            .chunks_exact(2)
-            .map(|b| T::from_f64(half::f16::from_le_bytes([b[0], b[1]]).to_f64()))
-            .collect()
-    }
-
-    /// Read `bytes` bytes of `buffer` from `offset`, through the read-back buffer in chunks.
-    pub(super) fn download(&self, buffer: &wgpu::Buffer, offset: usize, bytes: usize) -> Vec<u8> {
-        let mut out = Vec::with_capacity(bytes);
-        let chunk = self.readback.size() as usize;
-        let mut at = 0;
-        while at < bytes {
-            let n = (bytes - at).min(chunk);
-            let n4 = n.div_ceil(4) * 4;
-            let mut enc = self.ctx.device.create_command_encoder(&Default::default());
-            enc.copy_buffer_to_buffer(buffer, (offset + at) as u64, &self.readback, 0, n4 as u64);
-            self.ctx.queue.submit([enc.finish()]);
-            let data = self
-                .ctx
-                .read(&self.readback, n4 as u64)
-                .unwrap_or_else(|e| panic!("{e}: the GPU device was lost"));
-            out.extend_from_slice(&data[..n]);
-            at += n;
-        }
-        out
-    }
-
-    fn aux_values(&self, first: usize, count: usize) -> Vec<T> {
-        from_bytes(&self.download(&self.aux_buf, first * T::BYTES, count * T::BYTES))
     }
 
     fn encoder(&self) -> wgpu::CommandEncoder {
@@ -235,73 +154,6 @@ impl<T: Real> GpuFluid<T> {
         pass.set_bind_group(0, &self.groups[g], &[]);
         pass.set_bind_group(1, &list.group, &[]);
         pass.dispatch_workgroups(groups.0, groups.1, 1);
-    }
-
-    fn has_peers(&self) -> bool {
-        self.geo.peers != 0
-    }
-
-    /// Extract the outgoing halo columns of the current buffer and exchange them with the
-    /// neighbours; the received columns are staged in `aux`, ready for `unpack_halo`.
-    /// `overlap` is recorded and submitted before the transfer, so it runs on the device
-    /// while the messages travel. Returns the exposed wait (s). Collective.
-    fn exchange(&mut self, comm: &dyn Comm, overlap: Option<wgpu::CommandEncoder>) -> f64 {
-        let rows = self.host.ny + 2;
-        let cur = self.host.cur;
-        let mut enc = self.encoder();
-        self.dispatch(
-            &mut enc,
-            &self.pipes.pack,
-            cur,
-            &self.inner,
-            job_groups(rows),
-        );
-        self.ctx.queue.submit([enc.finish()]);
-        // The staged values are already the little-endian bytes the halo buffers hold.
-        let side_bytes = HALO_DIRS * rows * T::BYTES;
-        let at = self.geo.halo_at as usize * T::BYTES;
-        let out = self.download(&self.aux_buf, at, 2 * side_bytes);
-        for (s, side) in [Side::Left, Side::Right].into_iter().enumerate() {
-            if self.host.halo.peer(side).is_some() {
-                let part = &out[s * side_bytes..(s + 1) * side_bytes];
-                self.host.halo.send_mut(side).copy_from_slice(part);
-            }
-        }
-        if let Some(enc) = overlap {
-            self.ctx.queue.submit([enc.finish()]);
-        }
-        let mut halo = std::mem::take(&mut self.host.halo);
-        let waited = halo.exchange(comm, &mut || {});
-        self.host.halo = halo;
-        let inbox = self.geo.halo_at as usize + 2 * HALO_DIRS * rows;
-        for (s, side) in [Side::Left, Side::Right].into_iter().enumerate() {
-            if self.host.halo.peer(side).is_some() {
-                let at = (inbox + s * HALO_DIRS * rows) * T::BYTES;
-                self.ctx
-                    .queue
-                    .write_buffer(&self.aux_buf, at as u64, self.host.halo.recv(side));
-            }
-        }
-        waited
-    }
-
-    /// Fill the exchanged halos of the current buffer (before reading fields). Collective.
-    fn refresh_exchange(&mut self, comm: &dyn Comm) {
-        if !self.has_peers() {
-            return;
-        }
-        let waited = self.exchange(comm, None);
-        self.host.halo_wait_s += waited;
-        let mut enc = self.encoder();
-        let g = self.host.cur ^ 1;
-        self.dispatch(
-            &mut enc,
-            &self.pipes.unpack,
-            g,
-            &self.inner,
-            job_groups(self.host.ny + 2),
-        );
-        self.ctx.queue.submit([enc.finish()]);
     }
 
     /// The first unstable step and cell recorded on the device, if any.
