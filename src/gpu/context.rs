@@ -180,8 +180,9 @@ impl GpuContext {
         Ok(out)
     }
 
-    /// As [`Self::read`], into `out` (cleared first; its allocation is kept, so a read
-    /// every step allocates nothing once `out` has grown).
+    /// As [`Self::read`], into `out`: on success `out` holds exactly the bytes read (its
+    /// allocation is kept, so a read every step allocates nothing once `out` has grown); on
+    /// an error it is left as it was.
     pub fn read_into(
         &self,
         buffer: &wgpu::Buffer,

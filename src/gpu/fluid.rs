@@ -19,7 +19,7 @@ mod halo;
 mod setup;
 mod transfer;
 
-pub(super) use transfer::{from_bytes, to_bytes};
+pub(super) use transfer::{extend_from_bytes, from_bytes, to_bytes};
 
 /// Uniform block of the kernels (`Geo` in shaders/common.wgsl).
 #[repr(C)]
@@ -101,8 +101,9 @@ pub struct GpuFluid<T: Real> {
     pub(super) moving_idx: Vec<u32>,
     /// The moving kernels' real upload of the last step (kept for its allocation).
     pub(super) moving_real: Vec<T>,
-    /// The per-step read-back's bytes and values (kept for their allocations).
+    /// The per-step read-back's bytes (kept for their allocation).
     pub(super) read_bytes: Vec<u8>,
+    /// The per-step read-back's values (kept for their allocation).
     pub(super) read_values: Vec<T>,
     pending_steps: usize,
 }

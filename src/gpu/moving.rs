@@ -240,12 +240,12 @@ impl<T: Real> GpuFluid<T> {
                 .read_into(&self.readback, (at + 4) as u64, &mut data)
                 .unwrap_or_else(|e| panic!("{e}: the GPU device was lost"));
             let flag = u32::from_le_bytes(data[at..at + 4].try_into().expect("4 bytes"));
-            values.extend(data[..bytes].chunks_exact(T::BYTES).map(T::get_le));
+            super::fluid::extend_from_bytes(&data[..bytes], values);
             self.read_bytes = data;
             flag
         } else {
             let data = self.download(rbuf, first * T::BYTES, bytes);
-            values.extend(data.chunks_exact(T::BYTES).map(T::get_le));
+            super::fluid::extend_from_bytes(&data, values);
             let v = self.download(&self.bad_buf, 12, 4);
             u32::from_le_bytes(v[0..4].try_into().expect("4 bytes"))
         };

@@ -439,6 +439,53 @@ mod tests {
         same_fields(&with, &without, "empty plan");
     }
 
+    /// The plan index of the cell the sweep reports bad, on two arrays and in place, after
+    /// one step in which only cell `n`'s solid moves at NaN.
+    fn bad_cell<T: Real>(n: usize) -> [Option<usize>; 2] {
+        let mut plan = plan(&lattice::<T>(Collision::Bgk));
+        // Each share has a body of its own: only this cell's shares go NaN.
+        for at in plan.start[n]..plan.start[n + 1] {
+            let body = plan.shares[at as usize].body as usize;
+            plan.bodies[body].velocity = [f64::NAN, 0.0];
+        }
+        [false, true].map(|in_place| {
+            let mut lat = lattice::<T>(Collision::Bgk);
+            if in_place {
+                lat.make_in_place();
+            }
+            let mut m = Vec::new();
+            lat.stream_collide_moving(
+                &SingleProcess,
+                &mut MovingCells::Partial(&plan, &mut m, &mut BodyColumns::default()),
+            )
+            .unwrap()
+            .map(|(bad, _)| bad)
+        })
+    }
+
+    /// A cell that goes bad is named by its plan index, whichever lane of its chunk it
+    /// sits in and whether the chunk is blended in lanes or lane by lane (cells of two
+    /// shares), in bulk runs and special cells, as the two-array kernel names it.
+    #[test]
+    fn in_place_partial_sweep_names_the_bad_cell() {
+        let plan = plan(&lattice::<f32>(Collision::Bgk));
+        let (mut one, mut two) = (0, 0);
+        for n in (0..plan.cells.len()).step_by(3) {
+            for got in [bad_cell::<f32>(n), bad_cell::<f64>(n)] {
+                assert_eq!(got, [Some(n); 2], "plan cell {n}");
+            }
+            if plan.start[n + 1] - plan.start[n] == 1 {
+                one += 1;
+            } else {
+                two += 1;
+            }
+        }
+        assert!(
+            one > 40 && two > 3,
+            "{one} one-share and {two} two-share cells"
+        );
+    }
+
     #[test]
     fn in_place_partial_cells_give_the_two_array_bits() {
         in_place_partial_cells_match_two_arrays::<f64>(Collision::Bgk);

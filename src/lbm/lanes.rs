@@ -84,9 +84,10 @@ impl<T: Real, const N: usize> Neg for Lanes<T, N> {
 
 impl<T: Real, const N: usize> Lanes<T, N> {
     /// Lane l of `a` where bit l of `mask` is set, of `b` elsewhere (one masked blend: no
-    /// lane is written alone, so the values stay in a register).
+    /// lane is written alone, so the values stay in a register). At most 32 lanes.
     #[inline(always)]
     pub fn select(mask: u32, a: Self, b: Self) -> Self {
+        const { assert!(N <= 32, "a u32 mask holds 32 lanes") };
         Lanes(std::array::from_fn(|l| {
             if mask >> l & 1 != 0 {
                 a.0[l]
@@ -96,9 +97,10 @@ impl<T: Real, const N: usize> Lanes<T, N> {
         }))
     }
 
-    /// Bit l set where lane l is greater than `v` (clear for NaN).
+    /// Bit l set where lane l is greater than `v` (clear for NaN). At most 32 lanes.
     #[inline(always)]
     pub fn greater_mask(self, v: T) -> u32 {
+        const { assert!(N <= 32, "a u32 mask holds 32 lanes") };
         let mut mask = 0;
         for l in 0..N {
             mask |= u32::from(self.0[l] > v) << l;

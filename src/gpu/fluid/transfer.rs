@@ -5,7 +5,7 @@
 use super::*;
 
 /// `values` as little-endian bytes.
-pub(crate) fn to_bytes<T: Real>(values: &[T]) -> Vec<u8> {
+pub(in crate::gpu) fn to_bytes<T: Real>(values: &[T]) -> Vec<u8> {
     let mut out = vec![0u8; values.len() * T::BYTES];
     for (v, b) in values.iter().zip(out.chunks_exact_mut(T::BYTES)) {
         v.put_le(b);
@@ -14,8 +14,15 @@ pub(crate) fn to_bytes<T: Real>(values: &[T]) -> Vec<u8> {
 }
 
 /// Little-endian `bytes` as values (`T::BYTES` each).
-pub(crate) fn from_bytes<T: Real>(bytes: &[u8]) -> Vec<T> {
-    bytes.chunks_exact(T::BYTES).map(T::get_le).collect()
+pub(in crate::gpu) fn from_bytes<T: Real>(bytes: &[u8]) -> Vec<T> {
+    let mut out = Vec::with_capacity(bytes.len() / T::BYTES);
+    extend_from_bytes(bytes, &mut out);
+    out
+}
+
+/// Append little-endian `bytes` to `out` as values (`T::BYTES` each).
+pub(in crate::gpu) fn extend_from_bytes<T: Real>(bytes: &[u8], out: &mut Vec<T>) {
+    out.extend(bytes.chunks_exact(T::BYTES).map(T::get_le));
 }
 
 impl<T: Real> GpuFluid<T> {
