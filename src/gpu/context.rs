@@ -173,17 +173,21 @@ impl GpuContext {
         let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
     }
 
-    /// Copy `bytes` bytes at the start of `buffer` (a MAP_READ buffer) to the host.
-    pub fn read(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
-        let mut out = Vec::new();
-        self.read_into(buffer, bytes, &mut out)?;
-        Ok(out)
+    /// Copy `bytes` bytes at the start of `buffer` (a MAP_READ buffer) into `out`, which
+    /// then holds exactly those bytes (its allocation is kept, so a read every step
+    /// allocates nothing once `out` has grown); on an error `out` is left empty.
+    pub fn read_into(
+        &self,
+        buffer: &wgpu::Buffer,
+        bytes: u64,
+        out: &mut Vec<u8>,
+    ) -> Result<(), GpuError> {
+        out.clear();
+        self.read_append(buffer, bytes, out)
     }
 
-    /// As [`Self::read`], into `out`: on success `out` holds exactly the bytes read (its
-    /// allocation is kept, so a read every step allocates nothing once `out` has grown); on
-    /// an error it is left as it was.
-    pub fn read_into(
+    /// As [`Self::read_into`], appending the bytes to `out` (unchanged on an error).
+    pub fn read_append(
         &self,
         buffer: &wgpu::Buffer,
         bytes: u64,
@@ -198,7 +202,6 @@ impl GpuContext {
         rx.recv()
             .map_err(|e| GpuError::Map(e.to_string()))?
             .map_err(|e| GpuError::Map(e.to_string()))?;
-        out.clear();
         out.extend_from_slice(
             &slice
                 .get_mapped_range()

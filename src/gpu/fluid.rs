@@ -101,7 +101,8 @@ pub struct GpuFluid<T: Real> {
     pub(super) moving_idx: Vec<u32>,
     /// The moving kernels' real upload of the last step (kept for its allocation).
     pub(super) moving_real: Vec<T>,
-    /// The per-step read-back's bytes (kept for their allocation).
+    /// The per-step read-backs' bytes (moving cells' sums, halos; kept for their
+    /// allocation).
     pub(super) read_bytes: Vec<u8>,
     /// The per-step read-back's values (kept for their allocation).
     pub(super) read_values: Vec<T>,

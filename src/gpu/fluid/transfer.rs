@@ -82,6 +82,20 @@ impl<T: Real> GpuFluid<T> {
         bytes: usize,
     ) -> Vec<u8> {
         let mut out = Vec::with_capacity(bytes);
+        self.download_into(buffer, offset, bytes, &mut out);
+        out
+    }
+
+    /// As [`Self::download`], into `out` (cleared first; its allocation is kept, so a
+    /// download every step allocates nothing once `out` has grown).
+    pub(in crate::gpu) fn download_into(
+        &self,
+        buffer: &wgpu::Buffer,
+        offset: usize,
+        bytes: usize,
+        out: &mut Vec<u8>,
+    ) {
+        out.clear();
         let chunk = self.readback.size() as usize;
         let mut at = 0;
         while at < bytes {
@@ -90,14 +104,13 @@ impl<T: Real> GpuFluid<T> {
             let mut enc = self.ctx.device.create_command_encoder(&Default::default());
             enc.copy_buffer_to_buffer(buffer, (offset + at) as u64, &self.readback, 0, n4 as u64);
             self.ctx.queue.submit([enc.finish()]);
-            let data = self
-                .ctx
-                .read(&self.readback, n4 as u64)
+            // The copy is whole words: read them, keep the n bytes asked for.
+            self.ctx
+                .read_append(&self.readback, n4 as u64, out)
                 .unwrap_or_else(|e| panic!("{e}: the GPU device was lost"));
-            out.extend_from_slice(&data[..n]);
+            out.truncate(at + n);
             at += n;
         }
-        out
     }
 
     /// `count` reals of the auxiliary buffer from `first`.
