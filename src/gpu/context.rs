@@ -173,20 +173,9 @@ impl GpuContext {
         let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
     }
 
-    /// Copy `bytes` bytes at the start of `buffer` (a MAP_READ buffer) into `out`, which
-    /// then holds exactly those bytes (its allocation is kept, so a read every step
-    /// allocates nothing once `out` has grown); on an error `out` is left empty.
-    pub fn read_into(
-        &self,
-        buffer: &wgpu::Buffer,
-        bytes: u64,
-        out: &mut Vec<u8>,
-    ) -> Result<(), GpuError> {
-        out.clear();
-        self.read_append(buffer, bytes, out)
-    }
-
-    /// As [`Self::read_into`], appending the bytes to `out` (unchanged on an error).
+    /// Append `bytes` bytes at the start of `buffer` (a MAP_READ buffer) to `out` (unchanged
+    /// on an error). A caller that reads every step keeps `out` between steps (cleared
+    /// first), so the read allocates nothing once `out` has grown.
     pub fn read_append(
         &self,
         buffer: &wgpu::Buffer,

@@ -236,8 +236,9 @@ impl<T: Real> GpuFluid<T> {
             enc.copy_buffer_to_buffer(&self.bad_buf, 12, &self.readback, at as u64, 4);
             self.ctx.queue.submit([enc.finish()]);
             let mut data = std::mem::take(&mut self.read_bytes);
+            data.clear();
             self.ctx
-                .read_into(&self.readback, (at + 4) as u64, &mut data)
+                .read_append(&self.readback, (at + 4) as u64, &mut data)
                 .unwrap_or_else(|e| panic!("{e}: the GPU device was lost"));
             let flag = u32::from_le_bytes(data[at..at + 4].try_into().expect("4 bytes"));
             super::fluid::extend_from_bytes(&data[..bytes], values);
