@@ -101,8 +101,10 @@ impl Coupler {
     }
 
     /// The collect from the backend's per-group sums: each used slot is added to its
-    /// grain's column sum (in group order; a grain's groups reach different columns). Checks
-    /// that the slots hold every link or share of the plan.
+    /// grain's column sum (in group order; a grain's groups reach different columns); where
+    /// the backend summed only some bodies (`BodyColumns::body_slot`), the others' shares
+    /// are collected one by one ([`Coupler::collect_psm_unslotted`]). Checks that the two
+    /// hold every link or share of the plan.
     pub(super) fn collect_bodies(&mut self, views: &[GrainView]) {
         let f = self.frame;
         let cols = std::mem::take(&mut self.body_columns);
@@ -122,7 +124,11 @@ impl Coupler {
                 self.sums.add_in(&w, f.x0 + x_lo + s - first, cols.sums[s]);
             }
         }
+        let some = !cols.body_slot.is_empty();
         self.body_columns = cols;
+        if some {
+            seen += self.collect_psm_unslotted(views);
+        }
         let planned = match self.scheme {
             Scheme::Psm => self.psm.shares.len(),
             _ => self.links.links.len(),

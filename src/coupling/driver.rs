@@ -13,7 +13,7 @@ use super::map::{GrainView, SlabFrame};
 use super::sums::{total, ColumnSums, Load};
 use crate::dem::{DemSetup, DemSystem, Grains, SlabDem};
 use crate::lbm::lattice::{Face, FaceCondition};
-use crate::lbm::moving::MovingCells;
+use crate::lbm::moving::{MovingCells, PlanKind};
 use crate::lbm::{FluidBackend, Real};
 use crate::run::RunError;
 use crate::scene::coupling::grain_scene;
@@ -426,8 +426,12 @@ impl LbmDem {
     /// Stage "coupling" before the sweep: plan the cells at the grains' surfaces (see
     /// [`Coupler::plan`]).
     pub fn plan<T: Real>(&mut self, fluid: &dyn FluidBackend<T>) {
+        let kind = match self.coupler.scheme() {
+            super::Scheme::Psm => PlanKind::Partial,
+            _ => PlanKind::Links,
+        };
         self.coupler
-            .plan(fluid.lattice(), &self.views, fluid.sums_per_body());
+            .plan(fluid.lattice(), &self.views, fluid.sums_per_body(kind));
     }
 
     /// The planned cells, for the fluid's sweep.

@@ -115,6 +115,9 @@ pub struct Coupler {
     /// Per body of the link plan (per grain image with PSM): its window of the column
     /// sums (scratch of the collect).
     pub(super) body_windows: Vec<super::sums::Window>,
+    /// Rows that hold shares of bodies the fluid backend did not sum (a PSM collect's
+    /// scratch).
+    pub(super) rest_rows: Vec<bool>,
     pub(super) psm: PsmPlan,
     /// Momentum per link or share of the last exchange, and scratch lists.
     pub(super) link_momentum: Vec<f64>,
@@ -179,6 +182,7 @@ impl Coupler {
             links: LinkPlan::default(),
             body_grain: Vec::new(),
             body_windows: Vec::new(),
+            rest_rows: Vec::new(),
             body_start: Vec::new(),
             psm: PsmPlan::default(),
             link_momentum: Vec::new(),

@@ -118,21 +118,23 @@ impl SlabFrame {
     }
 
     /// [`SlabFrame::band_cells`] for a plan whose cells increase within each row (the
-    /// partially saturated plan): each row's cells of the band are found by bisection, so
-    /// a task reads only its own band's cells. The same visits in the same order.
+    /// partially saturated plan), on the rows `y` where `wanted(y)`: each row's cells of the
+    /// band are found by bisection, so a task reads only its own band's cells. The same
+    /// visits in the same order.
     #[inline]
     pub fn band_cells_sorted(
         &self,
         rows: &[u32],
         cells: &[u32],
         band: &std::ops::Range<usize>,
+        wanted: impl Fn(usize) -> bool,
         mut visit: impl FnMut(usize, usize, [f64; 2]),
     ) {
         let (lo, hi) = (
             band.start as i64 - self.x0 as i64,
             band.end as i64 - self.x0 as i64,
         );
-        for y in 0..rows.len().saturating_sub(1) {
+        for y in (0..rows.len().saturating_sub(1)).filter(|&y| wanted(y)) {
             let row = &cells[rows[y] as usize..rows[y + 1] as usize];
             debug_assert!(row.windows(2).all(|w| w[0] < w[1]), "row {y} is not sorted");
             // Padded indices of the band's first column and of the column after its last.
@@ -409,7 +411,13 @@ mod tests {
             for band in bands {
                 let (mut full, mut sorted) = (Vec::new(), Vec::new());
                 f.band_cells(&rows, &cells, &band, |c, col, p| full.push((c, col, p)));
-                f.band_cells_sorted(&rows, &cells, &band, |c, col, p| sorted.push((c, col, p)));
+                f.band_cells_sorted(
+                    &rows,
+                    &cells,
+                    &band,
+                    |_| true,
+                    |c, col, p| sorted.push((c, col, p)),
+                );
                 assert_eq!(full, sorted, "slab {case}, band {band:?}");
             }
         }

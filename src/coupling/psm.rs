@@ -6,9 +6,10 @@ use super::exchange::Coupler;
 use super::gather::{gather, group_by_row, row_of, Shared};
 use super::geometry::{box_lines, column_line, row_line, CellAreas};
 use super::map::{share_rows, shares_in_row, GrainView, Share};
-use crate::lbm::moving::SolidShare;
+use crate::lbm::moving::{SolidShare, NO_SLOT};
 use crate::lbm::{Lattice, Real};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// One row's partially saturated shares, kept from the map to the plan (and read by
 /// [`Coupler::solid_fraction`] in between).
@@ -219,6 +220,30 @@ impl Coupler {
     /// Add each share's momentum (as the sweep reported it) to its grain's column sums, in
     /// plan order (in parallel over bands of columns).
     pub(super) fn collect_psm(&mut self, views: &[GrainView]) {
+        self.collect_psm_where(views, None);
+    }
+
+    /// [`Coupler::collect_psm`] for the shares of the bodies the backend did not sum
+    /// (`BodyColumns::body_slot` is `NO_SLOT`), on the rows their boxes reach. Returns how
+    /// many shares it added.
+    pub(super) fn collect_psm_unslotted(&mut self, views: &[GrainView]) -> usize {
+        let mut rows = std::mem::take(&mut self.rest_rows);
+        rows.clear();
+        rows.resize(self.frame.ny, false);
+        let cols = &self.body_columns;
+        for (bx, &slot) in cols.boxes.iter().zip(&cols.body_slot) {
+            if slot == NO_SLOT {
+                rows[bx[2] as usize..(bx[2] + bx[3]) as usize].fill(true);
+            }
+        }
+        let n = self.collect_psm_where(views, Some(&rows));
+        self.rest_rows = rows;
+        n
+    }
+
+    /// [`Coupler::collect_psm`], or with `rows` only the shares of the bodies the backend
+    /// did not sum, on the rows marked there. Returns how many shares it added.
+    fn collect_psm_where(&mut self, views: &[GrainView], rows: Option<&[bool]>) -> usize {
         let f = self.frame;
         // Each grain image's window of its grain's column sums.
         let mut windows = std::mem::take(&mut self.body_windows);
@@ -229,19 +254,29 @@ impl Coupler {
         }));
         let (plan, momentum) = (&self.psm, &self.share_momentum);
         let (disks, win) = (&self.disk_images, &windows);
+        let slots = &self.body_columns.body_slot;
+        let added = AtomicUsize::new(0);
         self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
-            f.band_cells_sorted(&plan.rows, &plan.cells, &band, |c, col, centre| {
+            let mut n = 0;
+            let wanted = |y: usize| rows.is_none_or(|r| r[y]);
+            f.band_cells_sorted(&plan.rows, &plan.cells, &band, wanted, |c, col, centre| {
                 for s in plan.start[c] as usize..plan.start[c + 1] as usize {
                     // Plan share s: its grain and the image it sees.
                     let (i, p) = (plan.shares[s].body as usize, momentum[s]);
+                    if rows.is_some() && slots[i] != NO_SLOT {
+                        continue;
+                    }
                     let image = disks[i].1;
                     let arm = [centre[0] - image[0], centre[1] - image[1]];
                     // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
                     let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
                     sums.add_to(&win[i], col, load);
+                    n += 1;
                 }
             });
+            added.fetch_add(n, Ordering::Relaxed);
         });
         self.body_windows = windows;
+        added.into_inner()
     }
 }

@@ -10,6 +10,7 @@ use crate::lbm::collision::Collision;
 use crate::lbm::d2q9::{CX, CY, Q, W};
 use crate::lbm::fields::Fields;
 use crate::lbm::lattice::{FaceCondition, Lattice, StepError, FLUID, HALO_DIRS, MAX_SOLID};
+use crate::lbm::moving::PlanKind;
 use crate::lbm::{FluidBackend, Real};
 use crate::scene::GpuStorage;
 use decomposition::{Comm, Side};
@@ -396,7 +397,7 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         Ok(self.moving_cells(moving))
     }
 
-    fn sums_per_body(&self) -> bool {
+    fn sums_per_body(&self, _kind: PlanKind) -> bool {
         true
     }
 

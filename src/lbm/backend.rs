@@ -3,7 +3,7 @@
 
 use super::fields::Fields;
 use super::lattice::{Lattice, StepError};
-use super::moving::{MovingCells, Refill};
+use super::moving::{MovingCells, PlanKind, Refill};
 use super::real::Real;
 use decomposition::Comm;
 
@@ -31,10 +31,14 @@ pub trait FluidBackend<T: Real> {
         comm: &dyn Comm,
         moving: &mut MovingCells<'_>,
     ) -> Result<Option<(usize, f64)>, StepError>;
-    /// Whether [`FluidBackend::stream_collide_moving`] sums the momenta per body and column
-    /// itself when the plan's [`super::moving::BodyColumns`] ask for it (a device backend:
-    /// then only those sums come back to the host).
-    fn sums_per_body(&self) -> bool {
+    /// Whether [`FluidBackend::stream_collide_moving`] sums the momenta of a plan of `kind`
+    /// per body and column itself when the plan's [`super::moving::BodyColumns`] ask for it
+    /// (a device backend: then only those sums come back to the host), or some of them (the
+    /// CPU's in-place sweep, for partially saturated cells on a slab with no exchanged face:
+    /// the bodies inside one block of its rows, summed from momenta still in cache; see
+    /// [`super::moving::BodyColumns::body_slot`]).
+    fn sums_per_body(&self, kind: PlanKind) -> bool {
+        let _ = kind;
         false
     }
     /// Make every halo cell of the current state hold its neighbour's whole cell: the local
@@ -85,6 +89,9 @@ impl<T: Real> FluidBackend<T> for Lattice<T> {
         moving: &mut MovingCells<'_>,
     ) -> Result<Option<(usize, f64)>, StepError> {
         Lattice::stream_collide_moving(self, comm, moving)
+    }
+    fn sums_per_body(&self, kind: PlanKind) -> bool {
+        kind == PlanKind::Partial && self.in_place() && !self.exchanges_x()
     }
     fn refresh_halos_full(&mut self, comm: &dyn Comm) {
         Lattice::update_boundaries(self);

@@ -94,7 +94,7 @@ impl<T: Real> Lattice<T> {
     /// the lattice's operator, as a sweep would have (for a backend that swept elsewhere).
     /// Returns the plan index and density of the first cell that went bad.
     pub fn apply_moving(&mut self, moving: &mut MovingCells<'_>) -> Option<(usize, f64)> {
-        let run = MovingRun::new(moving, [None, None])?;
+        let run = MovingRun::new(moving, [None, None], None)?;
         with_collider!(self.collision, self.smagorinsky, self.params, |c| self
             .run_rows(c, &run));
         let n = run.first_bad()?;

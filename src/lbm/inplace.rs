@@ -67,6 +67,19 @@ impl<T: Real> Lattice<T> {
         self.layout != Layout::TwoArray
     }
 
+    /// Whether an x face is exchanged with a neighbouring slab (its edge column is then
+    /// swept after the halo arrives, row by row in parallel).
+    pub(crate) fn exchanges_x(&self) -> bool {
+        self.faces[..2].contains(&FaceCondition::Exchange)
+    }
+
+    /// Rows per block of a sweep that sums partially saturated loads per body: about four
+    /// blocks per thread, so that tasks balance, and as tall as that allows (a body whose
+    /// box crosses a block's edge is collected by the host instead), 4 to 256 rows.
+    fn sum_block_rows(&self) -> usize {
+        (self.ny / (4 * rayon::current_num_threads())).clamp(4, 256)
+    }
+
     /// Hold the populations in one buffer from now on: half the memory, and no
     /// write-allocate traffic. The state is kept (the current buffer's post-collision values
     /// move to the slots of the opposite direction, halos included).
@@ -111,7 +124,11 @@ impl<T: Real> Lattice<T> {
             exchanged(&self.faces[0]).then_some(0),
             exchanged(&self.faces[1]).then_some(self.nx - 1),
         ];
-        let run = MovingRun::new(moving, edge);
+        // With no exchanged face (no edge pass), partially saturated cells sum the loads of
+        // the bodies inside one block of rows in the sweep, which then goes by those blocks.
+        let block = (!self.exchanges_x()).then(|| self.sum_block_rows());
+        let run = MovingRun::new(moving, edge, block);
+        let summed = run.as_ref().is_some_and(|r| r.sums_bodies());
         let peers = self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some();
         // Open corners read their diagonal neighbour's values of the step's start, which the
         // sweep overwrites in place: taken first (the two-array kernel reads them untouched).
@@ -158,10 +175,14 @@ impl<T: Real> Lattice<T> {
             self.redrain = run.is_some();
         }
         self.step += 1;
-        Ok(run.and_then(|r| {
+        let bad = run.and_then(|r| {
             let n = r.first_bad()?;
             Some((n, self.density_at(r.cells()[n] as usize)))
-        }))
+        });
+        if let MovingCells::Partial(_, _, sums) = moving {
+            sums.made = summed;
+        }
+        Ok(bad)
     }
 
     /// Prepare the link cells of `run` on the exchanged edge columns before the sweep (the
@@ -224,6 +245,12 @@ impl<T: Real> Lattice<T> {
                 }
                 (&row.special, this.forces.row_start[y])
             } else {
+                // Loads summed per body come only from a sweep with no exchanged face (no
+                // edge cells): the edge pass goes row by row in parallel.
+                assert!(
+                    row.edge.is_empty() || !partial.as_ref().is_some_and(|p| p.sums_bodies()),
+                    "edge cells in a sweep that sums per body"
+                );
                 (&row.edge, this.forces.row_start[y] + row.special.len())
             };
             for (j, &x) in cells.iter().enumerate() {
@@ -262,6 +289,26 @@ impl<T: Real> Lattice<T> {
             }
         };
         match moving.filter(|r| inner && r.precomputes()) {
+            // Partially saturated cells that sum some loads per body: each task sweeps a
+            // block of rows in increasing order (see `ShareSums`).
+            None if inner && moving.and_then(|r| r.sum_block()).is_some() => {
+                let h = moving.and_then(|r| r.sum_block()).expect("tested");
+                let p = partial
+                    .as_ref()
+                    .expect("a sweep with sums has partial cells");
+                row_bad.par_chunks_mut(h).enumerate().for_each(|(b, bads)| {
+                    for (j, bad) in bads.iter_mut().enumerate() {
+                        sweep_row(b * h + j, bad);
+                    }
+                    // Then the block's loads, row by row, while its momenta are in cache
+                    // and the sums are not pushed out by the sweep's streams.
+                    for y in b * h..b * h + bads.len() {
+                        // SAFETY: the block's rows are swept, and the slots of the bodies
+                        // inside the block are this task's.
+                        unsafe { p.sum_row(y) };
+                    }
+                });
+            }
             None => row_bad
                 .par_iter_mut()
                 .enumerate()

@@ -87,7 +87,7 @@ impl<T: Real> Lattice<T> {
             exchange(&self.faces[0]).then_some(0),
             exchange(&self.faces[1]).then_some(self.nx - 1),
         ];
-        let run = MovingRun::new(moving, edge);
+        let run = MovingRun::new(moving, edge, None);
         self.pack_halo();
         let mut halo = std::mem::take(&mut self.halo);
         let waited = halo.exchange(comm, &mut || self.sweep_part(Part::Inner, run.as_ref()));

@@ -18,12 +18,13 @@ use super::boundary::{Access, Src};
 use super::collision::{equilibrium, Collider, Moments};
 use super::d2q9::{CX, CY, OPP, Q};
 use super::lattice::{is_plain, Lattice, Layout};
-use super::partial::{partial_cell, PartialSweep};
+use super::partial::{partial_cell, PartialSweep, ShareSums};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 pub use super::plans::{
-    cell_centre, BodyColumns, LinkPlan, MovingLink, PsmPlan, Refill, RigidMotion, SolidShare,
+    cell_centre, BodyColumns, LinkPlan, MovingLink, PlanKind, PsmPlan, Refill, RigidMotion,
+    SolidShare, NO_SLOT,
 };
 
 /// A raw pointer shared by rayon tasks that write disjoint elements.
@@ -90,17 +91,28 @@ pub(crate) struct MovingRun<'a> {
     bad: AtomicUsize,
     /// Local x of the columns next to exchanged faces (swept after the halo arrives).
     edge: [Option<usize>; 2],
+    /// Rows per block of a sweep that sums some loads per body (see [`MovingRun::new`]).
+    block: usize,
 }
 
 enum RunKind<'a> {
     Links(&'a LinkPlan, Disjoint<f64>),
-    Partial(&'a PsmPlan, Disjoint<[f64; 2]>),
+    Partial(&'a PsmPlan, Disjoint<[f64; 2]>, Option<ShareSums<'a>>),
 }
 
 impl<'a> MovingRun<'a> {
     /// Prepare `cells` for a sweep of a slab whose exchanged edge columns are `edge`;
-    /// `None` when there is nothing to do.
-    pub(crate) fn new(cells: &'a mut MovingCells<'_>, edge: [Option<usize>; 2]) -> Option<Self> {
+    /// `None` when there is nothing to do. With `sum_block` (a sweep by blocks of that many
+    /// rows, each block's rows in increasing order by one task), partially saturated cells
+    /// whose [`BodyColumns`] ask for sums also add the loads of every body whose box lies in
+    /// one block, and is its group's only body, to those sums (see
+    /// [`MovingRun::sums_bodies`]); the host collects the other bodies' shares from their
+    /// momenta, as without.
+    pub(crate) fn new(
+        cells: &'a mut MovingCells<'_>,
+        edge: [Option<usize>; 2],
+        sum_block: Option<usize>,
+    ) -> Option<Self> {
         let kind = match cells {
             MovingCells::None => return None,
             MovingCells::Links(plan, m, sums) => {
@@ -112,14 +124,32 @@ impl<'a> MovingRun<'a> {
             MovingCells::Partial(plan, m, sums) => {
                 sums.made = false;
                 m.clear();
+                let sums: &'a mut BodyColumns = sums;
+                let summed = sum_block.filter(|_| sums.wanted()).map(|h| {
+                    let n = sums.slots();
+                    sums.sums.clear();
+                    sums.sums.resize(n, [0.0; 3]);
+                    sums.counts.clear();
+                    sums.counts.resize(n, 0);
+                    block_slots(sums, h);
+                    let (s, c) = (sums.sums.as_mut_ptr(), sums.counts.as_mut_ptr());
+                    let cols: &'a BodyColumns = sums;
+                    ShareSums {
+                        sums: Disjoint(s),
+                        counts: Disjoint(c),
+                        body_slot: &cols.body_slot,
+                        boxes: &cols.boxes,
+                    }
+                });
                 m.resize(plan.shares.len(), [0.0; 2]);
-                RunKind::Partial(plan, Disjoint(m.as_mut_ptr()))
+                RunKind::Partial(plan, Disjoint(m.as_mut_ptr()), summed)
             }
         };
         Some(Self {
             kind,
             bad: AtomicUsize::new(usize::MAX),
             edge,
+            block: sum_block.unwrap_or(0),
         })
     }
 
@@ -143,6 +173,10 @@ impl<'a> MovingRun<'a> {
             Access::new(Layout::TwoArray, lat.plane, lat.stride),
         );
         let dst = Disjoint(dst);
+        assert!(
+            !self.sums_bodies(),
+            "a sweep by rows reports one momentum per share"
+        );
         for n in self.row_cells(lat, y, edge_pass) {
             let (h, ok) = self.cell(lat, c, src, acc, n, y);
             let k = self.cells()[n] as usize;
@@ -268,7 +302,7 @@ impl<'a> MovingRun<'a> {
     ) -> impl Iterator<Item = usize> + 's {
         let (rows, cells) = match &self.kind {
             RunKind::Links(p, _) => (&p.rows, &p.cells),
-            RunKind::Partial(p, _) => (&p.rows, &p.cells),
+            RunKind::Partial(p, ..) => (&p.rows, &p.cells),
         };
         let range = if rows.is_empty() {
             0..0
@@ -300,7 +334,7 @@ impl<'a> MovingRun<'a> {
     ) -> ([T; Q], bool) {
         match &self.kind {
             RunKind::Links(p, m) => link_cell(lat, c, src, acc, p, *m, n, y),
-            RunKind::Partial(p, m) => partial_cell(lat, c, src, acc, p, *m, n),
+            RunKind::Partial(p, m, _) => partial_cell(lat, c, src, acc, p, *m, n),
         }
     }
 
@@ -315,9 +349,23 @@ impl<'a> MovingRun<'a> {
     /// of row stride `stride`.
     pub(crate) fn partial_sweep(&self, stride: usize) -> Option<PartialSweep<'_>> {
         match &self.kind {
-            RunKind::Partial(plan, mom) => Some(PartialSweep::new(plan, stride, *mom, &self.bad)),
+            RunKind::Partial(plan, mom, sums) => {
+                Some(PartialSweep::new(plan, stride, *mom, *sums, &self.bad))
+            }
             RunKind::Links(..) => None,
         }
+    }
+
+    /// Whether the sweep adds some shares' loads to the plan's per-body column sums itself
+    /// (then it goes by the blocks of rows it was made for, and the caller marks the sums
+    /// made).
+    pub(crate) fn sums_bodies(&self) -> bool {
+        matches!(self.kind, RunKind::Partial(_, _, Some(_)))
+    }
+
+    /// The rows per block of a sweep that sums some loads per body, or `None`.
+    pub(crate) fn sum_block(&self) -> Option<usize> {
+        self.sums_bodies().then_some(self.block)
     }
 
     /// Plan index of the first cell that went bad, if any.
@@ -330,7 +378,27 @@ impl<'a> MovingRun<'a> {
     pub(crate) fn cells(&self) -> &[u32] {
         match &self.kind {
             RunKind::Links(p, _) => &p.cells,
-            RunKind::Partial(p, _) => &p.cells,
+            RunKind::Partial(p, ..) => &p.cells,
+        }
+    }
+}
+
+/// Fill `cols.body_slot` for a sweep by blocks of `h` rows: a body whose box lies in one
+/// block and is its group's only body gets its slot of local column 0 (each of its slots
+/// then has one task, which adds the column's cells in increasing row); any other body gets
+/// [`NO_SLOT`] (a group's bodies, or a box across blocks, would be added to by two tasks;
+/// the host collects them).
+fn block_slots(cols: &mut BodyColumns, h: usize) {
+    cols.body_slot.clear();
+    cols.body_slot.resize(cols.boxes.len(), NO_SLOT);
+    for j in 0..cols.groups.len() - 1 {
+        let &[b] = cols.group(j) else {
+            continue;
+        };
+        let bx = cols.boxes[b as usize];
+        let (first, last) = (bx[2] as usize, (bx[2] + bx[3]).max(1) as usize - 1);
+        if first / h == last / h {
+            cols.body_slot[b as usize] = cols.first[j] as i64 - cols.columns(j)[0] as i64;
         }
     }
 }

@@ -9,7 +9,7 @@ use super::d2q9::{CX, CY, OPP, Q};
 use super::lanes::{Lanes, Simd};
 use super::lattice::Lattice;
 use super::moving::{pull, Disjoint};
-use super::plans::PsmPlan;
+use super::plans::{cell_centre, PsmPlan, NO_SLOT};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -126,23 +126,113 @@ pub(crate) struct PartialSweep<'a> {
     plan: &'a PsmPlan,
     stride: usize,
     mom: Disjoint<[f64; 2]>,
+    sums: Option<ShareSums<'a>>,
     bad: &'a AtomicUsize,
+}
+
+/// The per-body column sums ([`super::moving::BodyColumns`]) that a sweep by blocks of rows
+/// adds the loads of the bodies that have a slot there to, from the momenta it has just
+/// recorded (still in cache), instead of leaving them to the host's collect: each such body
+/// lies in one block, whose task adds its rows in increasing order, so its slots receive the
+/// host collect's terms in its order (the column's cells in increasing row, a cell's shares
+/// in plan order) with its arithmetic: the same bits.
+#[derive(Clone, Copy)]
+pub(crate) struct ShareSums<'a> {
+    /// Per slot: p_x, p_y, torque.
+    pub(crate) sums: Disjoint<[f64; 3]>,
+    /// Per slot: the shares added.
+    pub(crate) counts: Disjoint<u32>,
+    /// Per body: the slot of local column 0, or `NO_SLOT` (`BodyColumns::body_slot`).
+    pub(crate) body_slot: &'a [i64],
+    /// Per body: its box (`BodyColumns::boxes`).
+    pub(crate) boxes: &'a [[u32; 4]],
+}
+
+impl ShareSums<'_> {
+    /// Add share `s` (of the cell at padded index `k`, local row `y`), which took momentum
+    /// `p` from the fluid, to its body's slot of the cell's column: [p_x, p_y, r × p] with r
+    /// the arm from the body's centre to the cell's (seed eqs. 5.53–5.54), the first load of
+    /// a slot on 0.0 (as the host collect adds).
+    ///
+    /// # Safety
+    /// The slots of the cell's column belong to the calling task.
+    #[inline]
+    unsafe fn add(&self, plan: &PsmPlan, stride: usize, s: usize, k: usize, y: usize, p: [f64; 2]) {
+        let body = plan.shares[s].body as usize;
+        let x = k - (y + 1) * stride - 1;
+        let bx = self.boxes[body];
+        // A share outside its body's box could be in another task's block or column.
+        assert!(
+            (bx[0] as usize..(bx[0] + bx[1]) as usize).contains(&x)
+                && (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
+            "a share outside its body's box"
+        );
+        let slot = (self.body_slot[body] + x as i64) as usize;
+        let centre = cell_centre(stride, plan.x0, k, y);
+        let image = plan.bodies[body].centre;
+        let arm = [centre[0] - image[0], centre[1] - image[1]];
+        // The grain's load from the momentum the share took (seed eqs. 5.53–5.54), in the
+        // host collect's arithmetic (`coupling/psm.rs`).
+        let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
+        let (sum, n) = (&mut *self.sums.0.add(slot), &mut *self.counts.0.add(slot));
+        if *n == 0 {
+            *sum = [0.0 + load[0], 0.0 + load[1], 0.0 + load[2]];
+        } else {
+            for (a, l) in sum.iter_mut().zip(load) {
+                *a += l;
+            }
+        }
+        *n += 1;
+    }
 }
 
 impl<'a> PartialSweep<'a> {
     /// The cells of `plan` in a lattice of row stride `stride`, their shares' momenta going
-    /// to `mom`, the first bad one to `bad`.
+    /// to `mom` (and with `sums`, for a sweep by blocks of rows, the loads of the bodies that
+    /// have a slot there to those, by [`PartialSweep::sum_row`]), the first bad one to
+    /// `bad`.
     pub(crate) fn new(
         plan: &'a PsmPlan,
         stride: usize,
         mom: Disjoint<[f64; 2]>,
+        sums: Option<ShareSums<'a>>,
         bad: &'a AtomicUsize,
     ) -> Self {
         Self {
             plan,
             stride,
             mom,
+            sums,
             bad,
+        }
+    }
+
+    /// Whether some shares' loads go to per-body column sums (the sweep must then go by the
+    /// blocks of rows they were made for, see [`ShareSums`]).
+    pub(crate) fn sums_bodies(&self) -> bool {
+        self.sums.is_some()
+    }
+
+    /// Add the loads of row `y`'s shares whose bodies have a slot in the sums (a sweep by
+    /// blocks of rows, see [`ShareSums`]) from the momenta the sweep has just recorded for
+    /// them: the row's cells in increasing x, each cell's shares in plan order. Nothing
+    /// without sums.
+    ///
+    /// # Safety
+    /// Row `y` has been swept, and the sums' slots of its bodies that have one belong to
+    /// the calling task.
+    pub(crate) unsafe fn sum_row(&self, y: usize) {
+        let Some(t) = &self.sums else {
+            return;
+        };
+        let plan = self.plan;
+        for n in self.row(y) {
+            let k = plan.cells[n] as usize;
+            for s in plan.start[n] as usize..plan.start[n + 1] as usize {
+                if t.body_slot[plan.shares[s].body as usize] != NO_SLOT {
+                    t.add(plan, self.stride, s, k, y, *self.mom.0.add(s));
+                }
+            }
         }
     }
 

@@ -235,6 +235,24 @@ pub struct BodyColumns {
     pub counts: Vec<u32>,
     /// Out: the backend made the sums.
     pub made: bool,
+    /// Out, from a backend that sums only some bodies (the CPU's in-place sweep, which also
+    /// reports every share's momentum): per body, the slot of its group's local column 0 (a
+    /// cell of local column x added to slot `body_slot[b] + x`), or [`NO_SLOT`] for a body
+    /// it did not sum, whose shares the host collects from their momenta. Empty when every
+    /// body was summed (a device backend).
+    pub body_slot: Vec<i64>,
+}
+
+/// [`BodyColumns::body_slot`] of a body the backend did not sum.
+pub const NO_SLOT: i64 = i64::MIN;
+
+/// Which kind of plan a step will execute (see [`crate::lbm::FluidBackend::sums_per_body`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlanKind {
+    /// A [`LinkPlan`].
+    Links,
+    /// A [`PsmPlan`].
+    Partial,
 }
 
 impl BodyColumns {
@@ -247,6 +265,7 @@ impl BodyColumns {
         self.sums.clear();
         self.counts.clear();
         self.made = false;
+        self.body_slot.clear();
     }
 
     /// Whether sums are wanted (boxes given).
