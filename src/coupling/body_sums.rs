@@ -1,7 +1,9 @@
 //! Loads summed by the fluid backend itself, per body and column
 //! ([`crate::lbm::moving::BodyColumns`]): a device
 //! backend then sends back about a dozen loads per grain instead of one momentum per link or
-//! share, and the host's collect becomes one addition per grain and column.
+//! share, and the host's collect becomes one addition per grain and column. The CPU's
+//! in-place sweep sums the partially saturated loads of the bodies inside one block of its
+//! rows, with the host collect's arithmetic (the same bits); the host collects the rest.
 //!
 //! The slot of a group of bodies and a column holds what the serial collect (`links.rs`,
 //! `psm.rs`) would have added to that grain's column sum: the same terms in the same order
@@ -9,7 +11,7 @@
 //! column sums, and the totals the owners fold from them (`sums.rs`), stay independent of
 //! the ranks. The backend's arithmetic may differ from the host's by rounding (the device
 //! sums with compensation and takes each arm from the cell holding the body's centre): the
-//! same bits on any rank count, not the CPU backend's bits.
+//! same bits on any rank count, not the CPU backend's bits (the CPU's own sums are).
 //!
 //! Only where every grain is small against the lattice (a diameter plus the boxes' margins
 //! under its height and width): a grain's images then never share rows, and a link's body

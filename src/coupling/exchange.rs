@@ -6,8 +6,9 @@
 //!
 //! The coupler only plans: which cells, which links, which velocities (`links.rs`,
 //! `psm.rs`). The fluid backend executes the plan (`lbm::moving`) on its own device and
-//! returns one momentum per link or share, in plan order, or (a device backend) those
-//! momenta already summed per grain and column in the same order (`body_sums.rs`).
+//! returns one momentum per link or share, in plan order, or (a device backend, and the CPU's
+//! in-place sweep for some PSM bodies) those momenta already summed per grain and column in
+//! the same order (`body_sums.rs`).
 //!
 //! **Order, and so the bits, do not depend on the partition.** The grains are seen in id
 //! order (owned and ghosts alike), each grain's cells in the order of its bounding box, so

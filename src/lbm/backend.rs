@@ -37,8 +37,7 @@ pub trait FluidBackend<T: Real> {
     /// CPU's in-place sweep, for partially saturated cells on a slab with no exchanged face:
     /// the bodies inside one block of its rows, summed from momenta still in cache; see
     /// [`super::moving::BodyColumns::body_slot`]).
-    fn sums_per_body(&self, kind: PlanKind) -> bool {
-        let _ = kind;
+    fn sums_per_body(&self, _kind: PlanKind) -> bool {
         false
     }
     /// Make every halo cell of the current state hold its neighbour's whole cell: the local

@@ -288,11 +288,12 @@ impl<T: Real> Lattice<T> {
                 *bad |= b as u8;
             }
         };
+        let block = moving.and_then(|r| r.sum_block()).filter(|_| inner);
         match moving.filter(|r| inner && r.precomputes()) {
             // Partially saturated cells that sum some loads per body: each task sweeps a
             // block of rows in increasing order (see `ShareSums`).
-            None if inner && moving.and_then(|r| r.sum_block()).is_some() => {
-                let h = moving.and_then(|r| r.sum_block()).expect("tested");
+            None if block.is_some() => {
+                let h = block.expect("tested");
                 let p = partial
                     .as_ref()
                     .expect("a sweep with sums has partial cells");

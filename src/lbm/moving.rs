@@ -398,7 +398,14 @@ fn block_slots(cols: &mut BodyColumns, h: usize) {
         let bx = cols.boxes[b as usize];
         let (first, last) = (bx[2] as usize, (bx[2] + bx[3]).max(1) as usize - 1);
         if first / h == last / h {
-            cols.body_slot[b as usize] = cols.first[j] as i64 - cols.columns(j)[0] as i64;
+            let columns = cols.columns(j);
+            // The group's slots are its columns (the writes through `ShareSums` rely on it).
+            assert_eq!(
+                cols.first[j + 1] - cols.first[j],
+                columns[1],
+                "group {j}'s slots are not its columns"
+            );
+            cols.body_slot[b as usize] = cols.first[j] as i64 - columns[0] as i64;
         }
     }
 }

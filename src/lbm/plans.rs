@@ -207,8 +207,9 @@ impl PsmPlan {
 /// A group is one body, or the images of one body across a periodic y face (they share
 /// their columns, and the host sums them into the same column sums). The caller fills the
 /// boxes and groups before the sweep; a backend that can (see
-/// [`crate::lbm::FluidBackend::sums_per_body`]) fills `sums` and `counts`, sets `made`, and
-/// leaves the per-link or per-share momenta empty. Each slot is summed over the cells of its
+/// [`crate::lbm::FluidBackend::sums_per_body`]) fills `sums` and `counts` and sets `made`; a
+/// device backend leaves the per-link or per-share momenta empty, the CPU's in-place sweep
+/// sums only some bodies (see `body_slot`) and reports every share's momentum. Each slot is summed over the cells of its
 /// column in increasing row (the group's bodies in turn, in increasing first row), each
 /// cell's links or shares in plan order: the order of a serial walk of the plan restricted
 /// to the slot, so it does not depend on how the lattice is split into slabs of columns.
