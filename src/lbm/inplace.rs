@@ -128,7 +128,7 @@ impl<T: Real> Lattice<T> {
         // the bodies inside one block of rows in the sweep, which then goes by those blocks.
         let block = (!self.exchanges_x()).then(|| self.sum_block_rows());
         let run = MovingRun::new(moving, edge, block);
-        let summed = run.as_ref().is_some_and(|r| r.sums_bodies());
+        let summed = run.as_ref().is_some_and(|r| r.sum_block().is_some());
         let peers = self.halo.peer(Side::Left).is_some() || self.halo.peer(Side::Right).is_some();
         // Open corners read their diagonal neighbour's values of the step's start, which the
         // sweep overwrites in place: taken first (the two-array kernel reads them untouched).

@@ -91,8 +91,6 @@ pub(crate) struct MovingRun<'a> {
     bad: AtomicUsize,
     /// Local x of the columns next to exchanged faces (swept after the halo arrives).
     edge: [Option<usize>; 2],
-    /// Rows per block of a sweep that sums some loads per body (see [`MovingRun::new`]).
-    block: usize,
 }
 
 enum RunKind<'a> {
@@ -106,7 +104,7 @@ impl<'a> MovingRun<'a> {
     /// rows, each block's rows in increasing order by one task), partially saturated cells
     /// whose [`BodyColumns`] ask for sums also add the loads of every body whose box lies in
     /// one block, and is its group's only body, to those sums (see
-    /// [`MovingRun::sums_bodies`]); the host collects the other bodies' shares from their
+    /// [`MovingRun::sum_block`]); the host collects the other bodies' shares from their
     /// momenta, as without.
     pub(crate) fn new(
         cells: &'a mut MovingCells<'_>,
@@ -139,6 +137,7 @@ impl<'a> MovingRun<'a> {
                         counts: Disjoint(c),
                         body_slot: &cols.body_slot,
                         boxes: &cols.boxes,
+                        block: h,
                     }
                 });
                 m.resize(plan.shares.len(), [0.0; 2]);
@@ -149,7 +148,6 @@ impl<'a> MovingRun<'a> {
             kind,
             bad: AtomicUsize::new(usize::MAX),
             edge,
-            block: sum_block.unwrap_or(0),
         })
     }
 
@@ -173,10 +171,6 @@ impl<'a> MovingRun<'a> {
             Access::new(Layout::TwoArray, lat.plane, lat.stride),
         );
         let dst = Disjoint(dst);
-        assert!(
-            !self.sums_bodies(),
-            "a sweep by rows reports one momentum per share"
-        );
         for n in self.row_cells(lat, y, edge_pass) {
             let (h, ok) = self.cell(lat, c, src, acc, n, y);
             let k = self.cells()[n] as usize;
@@ -356,16 +350,14 @@ impl<'a> MovingRun<'a> {
         }
     }
 
-    /// Whether the sweep adds some shares' loads to the plan's per-body column sums itself
-    /// (then it goes by the blocks of rows it was made for, and the caller marks the sums
-    /// made).
-    pub(crate) fn sums_bodies(&self) -> bool {
-        matches!(self.kind, RunKind::Partial(_, _, Some(_)))
-    }
-
-    /// The rows per block of a sweep that sums some loads per body, or `None`.
+    /// The rows per block when the sweep adds some shares' loads to the plan's per-body
+    /// column sums itself (it then goes by those blocks, and the caller marks the sums
+    /// made), or `None`.
     pub(crate) fn sum_block(&self) -> Option<usize> {
-        self.sums_bodies().then_some(self.block)
+        match &self.kind {
+            RunKind::Partial(_, _, Some(t)) => Some(t.block),
+            _ => None,
+        }
     }
 
     /// Plan index of the first cell that went bad, if any.

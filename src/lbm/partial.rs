@@ -146,6 +146,8 @@ pub(crate) struct ShareSums<'a> {
     pub(crate) body_slot: &'a [i64],
     /// Per body: its box (`BodyColumns::boxes`).
     pub(crate) boxes: &'a [[u32; 4]],
+    /// Rows per block of the sweep.
+    pub(crate) block: usize,
 }
 
 impl ShareSums<'_> {
