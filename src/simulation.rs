@@ -197,7 +197,14 @@ impl<T: Real> Simulation<T> {
                 format!("{e}; run on fewer ranks or use a wider lattice"),
             )
         })?;
-        let mut lattice = Lattice::<T>::new_slab(&built.setup, &partition, comm.rank());
+        // A lattice that goes in place below never needs the two-array kernel's second buffer.
+        let goes_in_place =
+            backend == Backend::Cpu && in_place(kernel, scene.scene.grains.is_some());
+        let mut lattice = if goes_in_place {
+            Lattice::<T>::new_slab_one_buffer(&built.setup, &partition, comm.rank())
+        } else {
+            Lattice::<T>::new_slab(&built.setup, &partition, comm.rank())
+        };
         let (x0, nx) = (lattice.x_offset(), lattice.nx());
         match scene.scene.fluid.initial {
             Initial::Rest => {}
@@ -226,7 +233,7 @@ impl<T: Real> Simulation<T> {
             }
         }
         lattice.update_boundaries();
-        if backend == Backend::Cpu && in_place(kernel, scene.scene.grains.is_some()) {
+        if goes_in_place {
             lattice.make_in_place();
         } else if kernel == Kernel::InPlace {
             return Err(invalid(

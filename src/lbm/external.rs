@@ -45,7 +45,15 @@ impl<T: Real> Lattice<T> {
     }
     /// The buffer the last step read: post-collision populations of the step before
     /// (shifted, h = f − w), halos included.
+    ///
+    /// # Panics
+    /// On a lattice built with one buffer ([`Lattice::new_slab_one_buffer`]) before it goes
+    /// in place (it has no previous buffer then).
     pub fn previous_buffer(&self) -> &[T] {
+        assert!(
+            !self.buf[self.cur ^ 1].is_empty() || self.in_place(),
+            "a lattice built with one buffer has no previous buffer before it goes in place"
+        );
         &self.buf[self.cur ^ 1]
     }
     /// The buffer the last step wrote (the current state), for rules that overwrite cells.
@@ -58,7 +66,14 @@ impl<T: Real> Lattice<T> {
         &self.buf[self.cur]
     }
     /// Both buffers: (previous, current), for rules that read one and write the other.
+    ///
+    /// # Panics
+    /// As [`Lattice::previous_buffer`].
     pub fn buffers_mut(&mut self) -> (&[T], &mut [T]) {
+        assert!(
+            !self.buf[self.cur ^ 1].is_empty() || self.in_place(),
+            "a lattice built with one buffer has no previous buffer before it goes in place"
+        );
         let (a, b) = self.buf.split_at_mut(1);
         if self.cur == 0 {
             (&b[0], &mut a[0])

@@ -16,12 +16,13 @@
 
 use super::aligned::AlignedBuf;
 use super::boundary::{Access, Src};
-use super::bulk_aa::{bulk_kernels, sweep_run};
+use super::bulk_aa::{bulk_kernels, sweep_run, BULK_LANES};
 use super::collision::{with_collider, Collider};
 use super::d2q9::{CX, CY, MIRROR_X, MIRROR_Y, OPP, Q};
 use super::lattice::{Face, FaceCondition, Lattice, Layout, StepError, FLUID, HALO_DIRS};
 use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
+use super::wall_runs::sweep_wall_run;
 use decomposition::{Comm, Side};
 use rayon::prelude::*;
 
@@ -253,7 +254,38 @@ impl<T: Real> Lattice<T> {
                 );
                 (&row.edge, this.forces.row_start[y] + row.special.len())
             };
-            for (j, &x) in cells.iter().enumerate() {
+            // Wall runs (inner rows only) go in lanes where no partially saturated cell lies
+            // in them; the rest of the cells one by one.
+            let runs: &[(u32, u32)] = if inner { &row.wall_runs } else { &[] };
+            let mut runs = runs.iter().peekable();
+            let mut j = 0;
+            while j < cells.len() {
+                let x = cells[j];
+                if let Some(&(_, count)) = runs.next_if(|r| r.0 as usize == j) {
+                    let n = count as usize / BULK_LANES * BULK_LANES;
+                    let k = yp * this.stride + x as usize + 1;
+                    if psm
+                        .as_ref()
+                        .is_none_or(|(p, r)| !p.any_in(r.clone(), k..k + n))
+                    {
+                        // SAFETY: the run's cells and their force slots are this task's.
+                        b |= unsafe {
+                            sweep_wall_run(
+                                this,
+                                c,
+                                base.ptr(),
+                                acc,
+                                y,
+                                x as usize,
+                                n,
+                                slots.ptr().add((first_slot + j) * ns),
+                                ns,
+                            )
+                        };
+                        j += n;
+                        continue;
+                    }
+                }
                 // SAFETY: the slots of this row's cells belong to this task only.
                 let f = unsafe {
                     std::slice::from_raw_parts_mut(slots.ptr().add((first_slot + j) * ns), ns)
@@ -274,6 +306,7 @@ impl<T: Real> Lattice<T> {
                     unsafe { *base.ptr().add(acc.store(i, k)) = *hi };
                 }
                 b |= !(m.rho > T::default());
+                j += 1;
             }
             // Link cells are swept with the rest of the row, whose check (pre-collision
             // density ≤ 0 or NaN, as the two-array path checks link cells) covers them, so

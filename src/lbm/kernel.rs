@@ -79,6 +79,11 @@ impl<T: Real> Lattice<T> {
         if self.in_place() {
             return self.stream_collide_in_place(comm, moving);
         }
+        // Checked before any exchange, so that no rank is left waiting.
+        assert!(
+            !self.buf[self.cur ^ 1].is_empty(),
+            "a lattice built with one buffer steps in place only (make_in_place first)"
+        );
         if self.step == 0 {
             self.fill_halo();
         }

@@ -161,11 +161,15 @@ pub(crate) struct RowPlan {
     pub bulk: Vec<(u32, u32)>,
     /// Fluid cells needing bounce-back or open-boundary reconstruction.
     pub special: Vec<u32>,
+    /// Runs `(first, count)` of `special` along a straight wall, which the in-place sweep
+    /// takes in lanes (see `wall_runs`).
+    pub wall_runs: Vec<(u32, u32)>,
     /// Fluid cells next to an exchanged face: computed after the halo has arrived.
     pub edge: Vec<u32>,
 }
 
-/// The D2Q9 lattice of one rank: two SoA buffers of shifted populations plus geometry.
+/// The D2Q9 lattice of one rank: two SoA buffers of shifted populations (one in place, or
+/// when built to go in place) plus geometry.
 pub struct Lattice<T: Real> {
     /// Local columns (the slab width).
     pub(crate) nx: usize,
@@ -276,6 +280,26 @@ impl<T: Real> Lattice<T> {
     /// on the other side of a rank face is the same as on one rank; faces shared with
     /// another rank become [`FaceCondition::Exchange`].
     pub fn new_slab(setup: &LatticeSetup, partition: &SlabPartition, rank: usize) -> Self {
+        Self::build(setup, partition, rank, 2)
+    }
+
+    /// [`Lattice::new_slab`] for a lattice that goes in place ([`Lattice::make_in_place`])
+    /// before its first step: the two-array kernel's second buffer is never allocated, so
+    /// the populations' peak memory (and the kernel's zeroing of fresh pages at start) is
+    /// one buffer, not two. Initial conditions, boundary updates and checkpoint imports work
+    /// as on a two-array lattice until then; a two-array step, [`Lattice::previous_buffer`]
+    /// and [`Lattice::buffers_mut`] panic (and so does anything that reads the previous
+    /// buffer, such as `gather_previous`).
+    pub fn new_slab_one_buffer(
+        setup: &LatticeSetup,
+        partition: &SlabPartition,
+        rank: usize,
+    ) -> Self {
+        Self::build(setup, partition, rank, 1)
+    }
+
+    /// [`Lattice::new_slab`] with `buffers` (1 or 2) population buffers allocated.
+    fn build(setup: &LatticeSetup, partition: &SlabPartition, rank: usize, buffers: usize) -> Self {
         let (gnx, ny) = (setup.nx, setup.ny);
         assert_eq!(setup.cells.len(), gnx * ny, "cell array size");
         let slab = partition.slab(rank);
@@ -312,7 +336,14 @@ impl<T: Real> Lattice<T> {
         let ns = setup.solids.len();
         let forces = ForceSlots::new(&plan, nx, ns);
         // Rest state: h = f − w = 0 everywhere.
-        let buf = [AlignedBuf::zeros(Q * plane), AlignedBuf::zeros(Q * plane)];
+        let buf = [
+            AlignedBuf::zeros_in_planes(Q, plane),
+            if buffers == 2 {
+                AlignedBuf::zeros_in_planes(Q, plane)
+            } else {
+                AlignedBuf::default()
+            },
+        ];
         let mut halo = halo;
         halo.set_message_bytes(HALO_DIRS * (ny + 2) * T::BYTES);
         Self {
@@ -378,7 +409,17 @@ impl<T: Real> Lattice<T> {
     pub fn steps_done(&self) -> u64 {
         self.step
     }
-    /// Bytes of distribution storage (both buffers, or the one in place; halo included).
+    /// The population buffers allocated: 2, or 1 in place or built to go in place (the
+    /// second is then empty).
+    fn buffers(&self) -> usize {
+        if self.buf[1].is_empty() {
+            1
+        } else {
+            2
+        }
+    }
+    /// Bytes of distribution storage (both buffers, or the one in place or built to go in
+    /// place; halo included).
     pub fn storage_bytes(&self) -> usize {
         self.buf.iter().map(|b| b.len()).sum::<usize>() * T::BYTES
     }
@@ -423,7 +464,8 @@ impl<T: Real> Lattice<T> {
     }
 
     /// Replace the state with `data` (as from [`Lattice::export_interior`]) after `step`
-    /// steps, in both buffers, and refill the local halos. Exchanged halos are filled by
+    /// steps, in both buffers (the one of [`Lattice::new_slab_one_buffer`]), and refill the
+    /// local halos. Exchanged halos are filled by
     /// the next step or [`Lattice::refresh_exchange`].
     pub fn import_interior(&mut self, data: &[T], step: u64) {
         assert_eq!(data.len(), Q * self.ny * self.nx, "checkpoint block size");
@@ -444,7 +486,7 @@ impl<T: Real> Lattice<T> {
             self.fill_halo();
             return;
         }
-        for b in 0..2 {
+        for b in 0..self.buffers() {
             for i in 0..Q {
                 for y in 0..self.ny {
                     let k = i * self.plane + self.idx(0, y as isize);
@@ -457,7 +499,8 @@ impl<T: Real> Lattice<T> {
         self.fill_halo();
     }
 
-    /// Overwrite interior cell (x, y) with the equilibrium of (ρ, u) in both buffers.
+    /// Overwrite interior cell (x, y) with the equilibrium of (ρ, u) in both buffers (the
+    /// one of [`Lattice::new_slab_one_buffer`]).
     /// Used for initial conditions.
     pub fn set_equilibrium(&mut self, x: usize, y: usize, rho: f64, u: [f64; 2]) {
         let k = self.idx(x as isize, y as isize);
@@ -472,7 +515,7 @@ impl<T: Real> Lattice<T> {
             "initial conditions are set before the lattice goes in place"
         );
         for (i, h) in eq.iter().enumerate() {
-            for b in 0..2 {
+            for b in 0..self.buffers() {
                 self.buf[b][i * self.plane + k] = T::from_f64(*h);
             }
         }
@@ -516,5 +559,6 @@ fn row_plan(types: &[u16], stride: usize, nx: usize, y: usize, exchange: [bool; 
     if let Some(s) = run_start {
         plan.bulk.push((s, nx as u32));
     }
+    plan.wall_runs = super::wall_runs::wall_runs(types, stride, yp, &plan.special);
     plan
 }

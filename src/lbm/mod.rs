@@ -26,6 +26,7 @@ mod partial;
 mod plans;
 pub mod population_bgk;
 pub mod real;
+mod wall_runs;
 mod whole_cells;
 
 pub use backend::FluidBackend;

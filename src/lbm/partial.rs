@@ -9,7 +9,7 @@ use super::d2q9::{CX, CY, OPP, Q};
 use super::lanes::{Lanes, Simd};
 use super::lattice::Lattice;
 use super::moving::{pull, Disjoint};
-use super::plans::{cell_centre, PsmPlan, NO_SLOT};
+use super::plans::{PsmPlan, NO_SLOT};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -151,30 +151,15 @@ pub(crate) struct ShareSums<'a> {
 }
 
 impl ShareSums<'_> {
-    /// Add share `s` (of the cell at padded index `k`, local row `y`), which took momentum
-    /// `p` from the fluid, to its body's slot of the cell's column: [p_x, p_y, r × p] with r
-    /// the arm from the body's centre to the cell's (seed eqs. 5.53–5.54), the first load of
-    /// a slot on 0.0 (as the host collect adds).
+    /// Add the load of a share that took momentum `p` from the fluid, at arm `arm` from
+    /// its body's centre to the cell's, to slot `slot`: [p_x, p_y, r × p] (seed eqs.
+    /// 5.53–5.54), the first load of a slot on 0.0 (as the host collect adds), in the host
+    /// collect's arithmetic (`coupling/psm.rs`).
     ///
     /// # Safety
-    /// The slots of the cell's column belong to the calling task.
-    #[inline]
-    unsafe fn add(&self, plan: &PsmPlan, stride: usize, s: usize, k: usize, y: usize, p: [f64; 2]) {
-        let body = plan.shares[s].body as usize;
-        let x = k - (y + 1) * stride - 1;
-        let bx = self.boxes[body];
-        // A share outside its body's box could be in another task's block or column.
-        assert!(
-            (bx[0] as usize..(bx[0] + bx[1]) as usize).contains(&x)
-                && (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
-            "a share outside its body's box"
-        );
-        let slot = (self.body_slot[body] + x as i64) as usize;
-        let centre = cell_centre(stride, plan.x0, k, y);
-        let image = plan.bodies[body].centre;
-        let arm = [centre[0] - image[0], centre[1] - image[1]];
-        // The grain's load from the momentum the share took (seed eqs. 5.53–5.54), in the
-        // host collect's arithmetic (`coupling/psm.rs`).
+    /// The slot belongs to the calling task.
+    #[inline(always)]
+    unsafe fn add(&self, slot: usize, arm: [f64; 2], p: [f64; 2]) {
         let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
         let (sum, n) = (&mut *self.sums.0.add(slot), &mut *self.counts.0.add(slot));
         if *n == 0 {
@@ -228,12 +213,39 @@ impl<'a> PartialSweep<'a> {
             return;
         };
         let plan = self.plan;
+        // Padded index of local column 0, and the row's centre line (as `cell_centre`).
+        let row0 = (y + 1) * self.stride + 1;
+        let cy = y as f64 + 0.5;
+        // The body at hand (a row's shares come body by body, mostly): its slot of local
+        // column 0, its box's columns and its image's centre.
+        let (mut last, mut slot0, mut cols, mut image) = (u32::MAX, NO_SLOT, 0..0, [0.0; 2]);
         for n in self.row(y) {
-            let k = plan.cells[n] as usize;
+            let x = plan.cells[n] as usize - row0;
+            let cx = (x as i64 + plan.x0) as f64 + 0.5;
             for s in plan.start[n] as usize..plan.start[n + 1] as usize {
-                if t.body_slot[plan.shares[s].body as usize] != NO_SLOT {
-                    t.add(plan, self.stride, s, k, y, *self.mom.0.add(s));
+                let body = plan.shares[s].body;
+                if body != last {
+                    last = body;
+                    slot0 = t.body_slot[body as usize];
+                    let bx = t.boxes[body as usize];
+                    // A share outside its body's box could be in another task's block or
+                    // column (checked for the bodies summed here).
+                    assert!(
+                        slot0 == NO_SLOT || (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
+                        "a share outside its body's box"
+                    );
+                    cols = bx[0] as usize..(bx[0] + bx[1]) as usize;
+                    image = plan.bodies[body as usize].centre;
                 }
+                if slot0 == NO_SLOT {
+                    continue;
+                }
+                assert!(cols.contains(&x), "a share outside its body's box");
+                t.add(
+                    (slot0 + x as i64) as usize,
+                    [cx - image[0], cy - image[1]],
+                    *self.mom.0.add(s),
+                );
             }
         }
     }
@@ -253,6 +265,14 @@ impl<'a> PartialSweep<'a> {
     #[inline(always)]
     pub(crate) fn cell(&self, n: usize) -> usize {
         self.plan.cells[n] as usize
+    }
+
+    /// Whether a plan cell among `range` (a row's cells) lies in the padded cells `ks`.
+    #[inline]
+    pub(crate) fn any_in(&self, range: std::ops::Range<usize>, ks: std::ops::Range<usize>) -> bool {
+        let cells = &self.plan.cells[range];
+        let from = cells.partition_point(|&k| (k as usize) < ks.start);
+        cells.get(from).is_some_and(|&k| (k as usize) < ks.end)
     }
 
     /// The plan index of padded cell `k` among `range` (a row's cells), if it is one.

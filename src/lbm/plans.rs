@@ -209,10 +209,11 @@ impl PsmPlan {
 /// boxes and groups before the sweep; a backend that can (see
 /// [`crate::lbm::FluidBackend::sums_per_body`]) fills `sums` and `counts` and sets `made`; a
 /// device backend leaves the per-link or per-share momenta empty, the CPU's in-place sweep
-/// sums only some bodies (see `body_slot`) and reports every share's momentum. Each slot is summed over the cells of its
-/// column in increasing row (the group's bodies in turn, in increasing first row), each
-/// cell's links or shares in plan order: the order of a serial walk of the plan restricted
-/// to the slot, so it does not depend on how the lattice is split into slabs of columns.
+/// sums only some bodies (see `body_slot`) and reports every share's momentum. Each slot is
+/// summed over the cells of its column in increasing row (the group's bodies in turn, in
+/// increasing first row), each cell's links or shares in plan order: the order of a serial
+/// walk of the plan restricted to the slot, so it does not depend on how the lattice is
+/// split into slabs of columns.
 #[derive(Debug, Clone, Default)]
 pub struct BodyColumns {
     /// Per body of the plan: `[first local column, columns, first local row, rows]` of the
