@@ -113,15 +113,16 @@ impl<'a> MovingRun<'a> {
     ) -> Option<Self> {
         let kind = match cells {
             MovingCells::None => return None,
+            // The sweep writes every link's and share's momentum before anything reads it,
+            // so the slots kept from the last step are not zeroed (a serial pass over
+            // megabytes each step); only new ones are.
             MovingCells::Links(plan, m, sums) => {
                 sums.made = false;
-                m.clear();
                 m.resize(plan.links.len(), 0.0);
                 RunKind::Links(plan, Disjoint(m.as_mut_ptr()))
             }
             MovingCells::Partial(plan, m, sums) => {
                 sums.made = false;
-                m.clear();
                 let sums: &'a mut BodyColumns = sums;
                 let summed = sum_block.filter(|_| sums.wanted()).map(|h| {
                     let n = sums.slots();
