@@ -324,22 +324,13 @@ impl<T: Real> Lattice<T> {
         let block = moving.and_then(|r| r.sum_block()).filter(|_| inner);
         match moving.filter(|r| inner && r.precomputes()) {
             // Partially saturated cells that sum some loads per body: each task sweeps a
-            // block of rows in increasing order (see `ShareSums`).
+            // block of rows in increasing order (see `ShareSums`), adding the loads as it
+            // blends the cells.
             None if block.is_some() => {
                 let h = block.expect("tested");
-                let p = partial
-                    .as_ref()
-                    .expect("a sweep with sums has partial cells");
                 row_bad.par_chunks_mut(h).enumerate().for_each(|(b, bads)| {
                     for (j, bad) in bads.iter_mut().enumerate() {
                         sweep_row(b * h + j, bad);
-                    }
-                    // Then the block's loads, row by row, while its momenta are in cache
-                    // and the sums are not pushed out by the sweep's streams.
-                    for y in b * h..b * h + bads.len() {
-                        // SAFETY: the block's rows are swept, and the slots of the bodies
-                        // inside the block are this task's.
-                        unsafe { p.sum_row(y) };
                     }
                 });
             }

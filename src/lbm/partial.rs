@@ -131,11 +131,11 @@ pub(crate) struct PartialSweep<'a> {
 }
 
 /// The per-body column sums ([`super::moving::BodyColumns`]) that a sweep by blocks of rows
-/// adds the loads of the bodies that have a slot there to, from the momenta it has just
-/// recorded (still in cache), instead of leaving them to the host's collect: each such body
-/// lies in one block, whose task adds its rows in increasing order, so its slots receive the
-/// host collect's terms in its order (the column's cells in increasing row, a cell's shares
-/// in plan order) with its arithmetic: the same bits.
+/// adds the loads of the bodies that have a slot there to, as it blends each cell, instead
+/// of leaving them to the host's collect: each such body lies in one block, whose task
+/// sweeps its rows in increasing order, and a slot (a body's column) takes one cell per
+/// row, a cell's shares in plan order; so its slots receive the host collect's terms in
+/// its order (the column's cells in increasing row) with its arithmetic: the same bits.
 #[derive(Clone, Copy)]
 pub(crate) struct ShareSums<'a> {
     /// Per slot: p_x, p_y, torque.
@@ -176,7 +176,7 @@ impl ShareSums<'_> {
 impl<'a> PartialSweep<'a> {
     /// The cells of `plan` in a lattice of row stride `stride`, their shares' momenta going
     /// to `mom` (and with `sums`, for a sweep by blocks of rows, the loads of the bodies that
-    /// have a slot there to those, by [`PartialSweep::sum_row`]), the first bad one to
+    /// have a slot there to those, as each cell is blended), the first bad one to
     /// `bad`.
     pub(crate) fn new(
         plan: &'a PsmPlan,
@@ -200,54 +200,39 @@ impl<'a> PartialSweep<'a> {
         self.sums.is_some()
     }
 
-    /// Add the loads of row `y`'s shares whose bodies have a slot in the sums (a sweep by
-    /// blocks of rows, see [`ShareSums`]) from the momenta the sweep has just recorded for
-    /// them: the row's cells in increasing x, each cell's shares in plan order. Nothing
-    /// without sums.
+    /// Add the load of plan share `s`, which took momentum `p` from the fluid at the cell
+    /// in local column `x` of row `y`, to its body's slot of that column when its body has
+    /// one in the sums (a sweep by blocks of rows, see [`ShareSums`]); nothing otherwise.
     ///
     /// # Safety
-    /// Row `y` has been swept, and the sums' slots of its bodies that have one belong to
-    /// the calling task.
-    pub(crate) unsafe fn sum_row(&self, y: usize) {
+    /// Row `y` is swept by the calling task, to which the slots of the bodies with one in
+    /// its block belong.
+    #[inline(always)]
+    unsafe fn sum_share(&self, s: usize, x: usize, y: usize, p: [f64; 2]) {
         let Some(t) = &self.sums else {
             return;
         };
         let plan = self.plan;
-        // Padded index of local column 0, and the row's centre line (as `cell_centre`).
-        let row0 = (y + 1) * self.stride + 1;
-        let cy = y as f64 + 0.5;
-        // The body at hand (a row's shares come body by body, mostly): its slot of local
-        // column 0, its box's columns and its image's centre.
-        let (mut last, mut slot0, mut cols, mut image) = (u32::MAX, NO_SLOT, 0..0, [0.0; 2]);
-        for n in self.row(y) {
-            let x = plan.cells[n] as usize - row0;
-            let cx = (x as i64 + plan.x0) as f64 + 0.5;
-            for s in plan.start[n] as usize..plan.start[n + 1] as usize {
-                let body = plan.shares[s].body;
-                if body != last {
-                    last = body;
-                    slot0 = t.body_slot[body as usize];
-                    let bx = t.boxes[body as usize];
-                    // A share outside its body's box could be in another task's block or
-                    // column (checked for the bodies summed here).
-                    assert!(
-                        slot0 == NO_SLOT || (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
-                        "a share outside its body's box"
-                    );
-                    cols = bx[0] as usize..(bx[0] + bx[1]) as usize;
-                    image = plan.bodies[body as usize].centre;
-                }
-                if slot0 == NO_SLOT {
-                    continue;
-                }
-                assert!(cols.contains(&x), "a share outside its body's box");
-                t.add(
-                    (slot0 + x as i64) as usize,
-                    [cx - image[0], cy - image[1]],
-                    *self.mom.0.add(s),
-                );
-            }
+        let body = plan.shares[s].body as usize;
+        let slot0 = t.body_slot[body];
+        if slot0 == NO_SLOT {
+            return;
         }
+        // A share outside its body's box could be in another task's block or column.
+        let bx = t.boxes[body];
+        assert!(
+            (bx[0] as usize..(bx[0] + bx[1]) as usize).contains(&x)
+                && (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
+            "a share outside its body's box"
+        );
+        // The arm from the image's centre to the cell's (as `cell_centre`).
+        let image = plan.bodies[body].centre;
+        let centre = [(x as i64 + plan.x0) as f64 + 0.5, y as f64 + 0.5];
+        t.add(
+            (slot0 + x as i64) as usize,
+            [centre[0] - image[0], centre[1] - image[1]],
+            p,
+        );
     }
 
     /// Plan indices of local row `y`'s cells, in increasing padded index.
@@ -339,11 +324,13 @@ impl<'a> PartialSweep<'a> {
         for (i, v) in new.into_iter().enumerate() {
             post[i] = Lanes::select(mask, v, post[i]);
         }
+        let row0 = (y + 1) * self.stride + 1;
         for n in cells {
             let l = lane(n);
             let at = plan.start[n] as usize;
-            self.mom
-                .write(at, [-p[0].0[l].to_f64(), -p[1].0[l].to_f64()]);
+            let momentum = [-p[0].0[l].to_f64(), -p[1].0[l].to_f64()];
+            self.mom.write(at, momentum);
+            self.sum_share(at, plan.cells[n] as usize - row0, y, momentum);
             if ok >> l & 1 == 0 {
                 self.bad.fetch_min(n, Ordering::Relaxed);
             }
@@ -400,6 +387,14 @@ impl<'a> PartialSweep<'a> {
     ) {
         let (new, ok) = blend_partial(self.plan, self.stride, self.mom, n, h, post, m);
         *post = new;
+        if self.sums.is_some() {
+            let k = self.plan.cells[n] as usize;
+            let y = PsmPlan::row_of(self.stride, k);
+            let x = k - (y + 1) * self.stride - 1;
+            for s in self.plan.start[n] as usize..self.plan.start[n + 1] as usize {
+                self.sum_share(s, x, y, *self.mom.0.add(s));
+            }
+        }
         if !ok {
             self.bad.fetch_min(n, Ordering::Relaxed);
         }
