@@ -2,15 +2,20 @@
 //! grains' state. The fluid core and the DEM never import each other.
 //!
 //! A coupled fluid step, in order (each a timed stage of `Simulation::step`):
-//! 1. `collide-stream`: the fluid sweep, unaware of grains (cells under grains are swept
-//!    as fluid and overwritten next);
-//! 2. `coupling`: [`Coupler::exchange`] recomputes the cells at the grains' surfaces with
-//!    the chosen scheme and sums each grain's hydrodynamic force and torque per lattice
-//!    column; the owners add the columns in order (`sums.rs`, `ghosts.rs`);
-//! 3. `dem`: n_s DEM sub-steps with that force held (seed eq. 5.61), plus the optional
-//!    short-range repulsion, then the ghost grains are exchanged; then [`Coupler::remap`]
-//!    hands over the cells the grains covered or uncovered;
-//! 4. `boundaries`: the fluid's halo refill.
+//! 1. `coupling`: [`Coupler::plan`] plans the cells at the grains' surfaces from the last
+//!    remap's maps (links for the bounce-back schemes, solid shares for PSM), plain data the
+//!    fluid core executes;
+//! 2. `collide-stream`: the fluid sweep recomputes the planned cells with the chosen scheme
+//!    right after their row, one momentum per link or share (PSM in place on a slab with no
+//!    exchanged face: most loads summed per grain and column as the cells are blended);
+//! 3. `coupling`: [`driver::LbmDem::exchange`] sums each grain's hydrodynamic force and
+//!    torque per lattice column; the owners add the columns in order (`sums.rs`,
+//!    `ghosts.rs`);
+//! 4. `dem`: n_s DEM sub-steps with that force held (seed eq. 5.61), plus the optional
+//!    short-range repulsion, then the ghost grains are exchanged; then `coupling` again:
+//!    [`Coupler::remap`] maps the grains where they moved and hands over the cells they
+//!    covered or uncovered;
+//! 5. `boundaries`: the fluid's halo refill.
 
 mod body_sums;
 mod boundary_lists;

@@ -73,7 +73,7 @@ pub fn write<T: H5Type + Copy>(
     write_with(path, comm, lattice, run, &|_, _| Ok(()))
 }
 
-/// [`write`] plus the groups `more` adds (another physics' state). Collective.
+/// [`write()`] plus the groups `more` adds (another physics' state). Collective.
 pub fn write_with<T: H5Type + Copy>(
     path: &Path,
     comm: &dyn Comm,

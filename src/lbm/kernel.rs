@@ -70,7 +70,7 @@ impl<T: Real> Lattice<T> {
     /// right after their row is swept (see [`super::moving`]). Returns the plan index and
     /// density of the first such cell that went NaN or non-positive (on this rank). When
     /// such a cell went bad on any rank, the step completes on every rank without the
-    /// fluid's own error ([`Lattice::check_sweep`]): the coupling reports it.
+    /// fluid's own error (`Lattice::check_sweep`): the coupling reports it.
     pub fn stream_collide_moving(
         &mut self,
         comm: &dyn Comm,
