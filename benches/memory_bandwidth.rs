@@ -5,8 +5,9 @@
 //! argue about. It runs over one array and over nine planes at once (as the kernel streams
 //! its nine directions, which keeps more misses in flight); the nine-plane figure is the
 //! roofline for the in-place kernel's 72 bytes per update in f32 and 144 in f64. The
-//! nine-plane update runs twice: on 4 KiB pages and on an array advised onto transparent
-//! huge pages, as the lattice's population buffer is (`AlignedBuf`).
+//! nine-plane update runs twice: on 4 KiB pages (where THP is `madvise` or `never`) and on
+//! an array advised onto transparent huge pages, as the lattice's population buffer is
+//! (`AlignedBuf`).
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -30,10 +31,10 @@ fn main() {
     let a = vec![1.0f64; n];
     let mut b = vec![0.0f64; n];
     let c = vec![2.0f64; n];
-    // The same size on huge pages: advised before its first touch.
-    let mut h: Vec<f64> = Vec::with_capacity(n);
-    grainflow::lbm::aligned::advise_huge_pages(h.as_mut_ptr() as *mut u8, n * 8);
-    h.resize(n, 0.0);
+    // The same size on huge pages: advised before its first touch, zero-filled by the
+    // pool's threads as the lattice's buffer is (`b` is first touched by the parallel
+    // passes too).
+    let mut h = grainflow::lbm::aligned::AlignedBuf::<f64>::zeros(n);
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

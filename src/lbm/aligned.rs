@@ -71,9 +71,11 @@ impl<T: Real> AlignedBuf<T> {
 }
 
 /// Ask the kernel to back the whole 4 KiB pages of `[ptr, ptr + bytes)`, memory this
-/// process allocated and has not touched yet, with transparent huge pages (Linux
-/// `madvise(MADV_HUGEPAGE)`): where THP is set to `madvise`, as on Debian's default kernels,
-/// nothing else gets them. Only advice: a kernel without THP ignores it, and the contents are
+/// process allocated, with transparent huge pages (Linux `madvise(MADV_HUGEPAGE)`): where THP
+/// is set to `madvise`, as on Debian's default kernels, nothing else gets them. Pages not yet
+/// touched get them at their first touch (a fresh mapping, as glibc gives allocations above
+/// its mmap threshold, 32 MiB at most; a smaller range may lie in the heap, where the advice
+/// outlives the buffer). Only advice: a kernel without THP ignores it, and the contents are
 /// unchanged either way. Ranges under 4 MiB are left alone (they would hold at most one huge
 /// page). Nothing off Linux.
 pub fn advise_huge_pages(ptr: *mut u8, bytes: usize) {

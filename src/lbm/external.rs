@@ -47,12 +47,12 @@ impl<T: Real> Lattice<T> {
     /// (shifted, h = f − w), halos included.
     ///
     /// # Panics
-    /// On a lattice built with one buffer ([`Lattice::new_slab_one_buffer`]) before it goes
-    /// in place (it has no previous buffer then).
+    /// On a lattice in place, or built with one buffer ([`Lattice::new_slab_one_buffer`]):
+    /// it has no previous buffer.
     pub fn previous_buffer(&self) -> &[T] {
         assert!(
-            !self.buf[self.cur ^ 1].is_empty() || self.in_place(),
-            "a lattice built with one buffer has no previous buffer before it goes in place"
+            !self.buf[self.cur ^ 1].is_empty(),
+            "no previous buffer: the lattice is in place, or was built with one buffer"
         );
         &self.buf[self.cur ^ 1]
     }
@@ -71,8 +71,8 @@ impl<T: Real> Lattice<T> {
     /// As [`Lattice::previous_buffer`].
     pub fn buffers_mut(&mut self) -> (&[T], &mut [T]) {
         assert!(
-            !self.buf[self.cur ^ 1].is_empty() || self.in_place(),
-            "a lattice built with one buffer has no previous buffer before it goes in place"
+            !self.buf[self.cur ^ 1].is_empty(),
+            "no previous buffer: the lattice is in place, or was built with one buffer"
         );
         let (a, b) = self.buf.split_at_mut(1);
         if self.cur == 0 {

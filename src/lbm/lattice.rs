@@ -411,7 +411,7 @@ impl<T: Real> Lattice<T> {
     }
     /// The population buffers allocated: 2, or 1 in place or built to go in place (the
     /// second is then empty).
-    fn buffers(&self) -> usize {
+    pub(crate) fn buffers(&self) -> usize {
         if self.buf[1].is_empty() {
             1
         } else {

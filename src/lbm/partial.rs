@@ -9,7 +9,7 @@ use super::d2q9::{CX, CY, OPP, Q};
 use super::lanes::{Lanes, Simd};
 use super::lattice::Lattice;
 use super::moving::{pull, Disjoint};
-use super::plans::{PsmPlan, NO_SLOT};
+use super::plans::{cell_centre, PsmPlan, NO_SLOT};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -200,15 +200,16 @@ impl<'a> PartialSweep<'a> {
         self.sums.is_some()
     }
 
-    /// Add the load of plan share `s`, which took momentum `p` from the fluid at the cell
-    /// in local column `x` of row `y`, to its body's slot of that column when its body has
-    /// one in the sums (a sweep by blocks of rows, see [`ShareSums`]); nothing otherwise.
+    /// Add the load of plan share `s`, which took momentum `p` from the fluid at the cell at
+    /// padded index `k` in local row `y`, to its body's slot of the cell's column when its
+    /// body has one in the sums (a sweep by blocks of rows, see [`ShareSums`]); nothing
+    /// otherwise.
     ///
     /// # Safety
     /// Row `y` is swept by the calling task, to which the slots of the bodies with one in
     /// its block belong.
     #[inline(always)]
-    unsafe fn sum_share(&self, s: usize, x: usize, y: usize, p: [f64; 2]) {
+    unsafe fn sum_share(&self, s: usize, k: usize, y: usize, p: [f64; 2]) {
         let Some(t) = &self.sums else {
             return;
         };
@@ -219,15 +220,16 @@ impl<'a> PartialSweep<'a> {
             return;
         }
         // A share outside its body's box could be in another task's block or column.
+        let x = k - (y + 1) * self.stride - 1;
         let bx = t.boxes[body];
         assert!(
             (bx[0] as usize..(bx[0] + bx[1]) as usize).contains(&x)
                 && (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
             "a share outside its body's box"
         );
-        // The arm from the image's centre to the cell's (as `cell_centre`).
+        // The arm from the image's centre to the cell's.
         let image = plan.bodies[body].centre;
-        let centre = [(x as i64 + plan.x0) as f64 + 0.5, y as f64 + 0.5];
+        let centre = cell_centre(self.stride, plan.x0, k, y);
         t.add(
             (slot0 + x as i64) as usize,
             [centre[0] - image[0], centre[1] - image[1]],
@@ -324,13 +326,12 @@ impl<'a> PartialSweep<'a> {
         for (i, v) in new.into_iter().enumerate() {
             post[i] = Lanes::select(mask, v, post[i]);
         }
-        let row0 = (y + 1) * self.stride + 1;
         for n in cells {
             let l = lane(n);
             let at = plan.start[n] as usize;
             let momentum = [-p[0].0[l].to_f64(), -p[1].0[l].to_f64()];
             self.mom.write(at, momentum);
-            self.sum_share(at, plan.cells[n] as usize - row0, y, momentum);
+            self.sum_share(at, plan.cells[n] as usize, y, momentum);
             if ok >> l & 1 == 0 {
                 self.bad.fetch_min(n, Ordering::Relaxed);
             }
@@ -390,9 +391,8 @@ impl<'a> PartialSweep<'a> {
         if self.sums.is_some() {
             let k = self.plan.cells[n] as usize;
             let y = PsmPlan::row_of(self.stride, k);
-            let x = k - (y + 1) * self.stride - 1;
             for s in self.plan.start[n] as usize..self.plan.start[n + 1] as usize {
-                self.sum_share(s, x, y, *self.mom.0.add(s));
+                self.sum_share(s, k, y, *self.mom.0.add(s));
             }
         }
         if !ok {

@@ -38,6 +38,11 @@ impl<T: Real> GpuFluid<T> {
     ) -> Result<Self, GpuError> {
         let f16 = pop_storage == GpuStorage::F16;
         assert!(!f16 || T::BYTES == 4, "FP16 storage needs f32 arithmetic");
+        assert_eq!(
+            host.buffers(),
+            2,
+            "the device takes a two-buffer lattice (Lattice::new_slab, not in place)"
+        );
         if f16 && !ctx.adapter.f16 {
             return Err(GpuError::NoF16 {
                 adapter: ctx.adapter.name.clone(),
