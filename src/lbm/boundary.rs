@@ -91,6 +91,22 @@ impl<T: Copy> Src<T> {
     }
 }
 
+/// The moving-wall term of half-way bounce-back along direction `i` off a wall moving at
+/// `u` (lattice units), ρ_w = 1: 2 w_i ρ_w (c_i · u)/c_s² = 6 w_i c_i · u (Ladd 1994, eq. 3.3;
+/// seed eq. 5.45).
+#[inline(always)]
+pub(crate) fn moving_wall_term(i: usize, u: [f64; 2]) -> f64 {
+    6.0 * W[i] * (CX[i] as f64 * u[0] + CY[i] as f64 * u[1])
+}
+
+/// The momentum a solid exchanges along direction `i` with a fluid cell that bounced the
+/// shifted population `back` (h*_ī) back into `bounced` (h_i): f*_ī + f_i = h*_ī + h_i + 2 w_i,
+/// of which the solid receives the negative times c_i (Ladd 1994).
+#[inline(always)]
+pub(crate) fn exchanged_momentum(i: usize, back: f64, bounced: f64) -> f64 {
+    back + bounced + 2.0 * W[i]
+}
+
 impl<T: Real> Lattice<T> {
     /// Fill the halo of the current buffer from the interior: periodic wrap, specular
     /// mirror (free slip) or zero-gradient copy (outflow). Wall and open halos are never
@@ -160,13 +176,11 @@ impl<T: Real> Lattice<T> {
                 h[i] = src.get(acc.pulled(i, k));
             } else if t <= MAX_SOLID {
                 let solid = &self.solids[t as usize - 1];
-                let cu = CX[i] as f64 * solid.velocity[0] + CY[i] as f64 * solid.velocity[1];
                 let back = src.get(acc.own(OPP[i], k));
                 // Half-way bounce-back with wall velocity, ρ_w = 1 (Ladd 1994, eq. 3.3).
-                h[i] = back + T::from_f64(6.0 * W[i] * cu);
+                h[i] = back + T::from_f64(moving_wall_term(i, solid.velocity));
                 if let Some(f) = force.as_deref_mut() {
-                    // Momentum exchange: the solid receives −(f*_ī + f_i) c_i (Ladd 1994).
-                    let m = back.to_f64() + h[i].to_f64() + 2.0 * W[i];
+                    let m = exchanged_momentum(i, back.to_f64(), h[i].to_f64());
                     f[t as usize - 1][0] -= m * CX[i] as f64;
                     f[t as usize - 1][1] -= m * CY[i] as f64;
                 }

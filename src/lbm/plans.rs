@@ -6,7 +6,7 @@
 //! * [`PsmPlan`]: partially saturated cells, each with its solid shares.
 //! * [`Refill`]: a cell a surface has just uncovered, to be rebuilt.
 
-use super::d2q9::{CX, CY, Q, W};
+use super::d2q9::{CX, CY, Q};
 
 /// One link of a fluid cell to a moving surface: population `dir` enters the cell from its
 /// solid neighbour at x − c_dir, which belongs to the rigid body `body` of the plan. Packed
@@ -132,10 +132,12 @@ impl LinkPlan {
     pub fn wall(&self, stride: usize, k: usize, y: usize, link: MovingLink) -> f64 {
         let i = link.dir();
         let centre = cell_centre(stride, self.x0, k, y);
-        let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-        let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+        let mid = [
+            centre[0] - 0.5 * CX[i] as f64,
+            centre[1] - 0.5 * CY[i] as f64,
+        ];
         let u = self.bodies[link.body()].velocity_at(mid);
-        6.0 * W[i] * (cx * u[0] + cy * u[1])
+        super::boundary::moving_wall_term(i, u)
     }
 }
 

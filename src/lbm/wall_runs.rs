@@ -5,10 +5,10 @@
 //! with the same bits: lanes and scalars round alike, and each cell's momentum to the walls
 //! is summed in the scalar path's order.
 
-use super::boundary::Access;
+use super::boundary::{exchanged_momentum, moving_wall_term, Access};
 use super::bulk_aa::BULK_LANES;
 use super::collision::Collider;
-use super::d2q9::{CX, CY, OPP, Q, W};
+use super::d2q9::{CX, CY, OPP, Q};
 use super::lanes::{Lanes, Simd};
 use super::lattice::{Lattice, FLUID, MAX_SOLID};
 use super::real::Real;
@@ -93,9 +93,7 @@ pub(crate) unsafe fn sweep_wall_run<T: Real, C: Collider<T>>(
     let wall: [Option<(usize, T)>; Q] = std::array::from_fn(|i| {
         (types[i] != FLUID).then(|| {
             let s = types[i] as usize - 1;
-            let u = lat.solids[s].velocity;
-            let cu = CX[i] as f64 * u[0] + CY[i] as f64 * u[1];
-            (s, T::from_f64(6.0 * W[i] * cu))
+            (s, T::from_f64(moving_wall_term(i, lat.solids[s].velocity)))
         })
     });
     let to: [*mut T; Q] = std::array::from_fn(|j| base.add(acc.store(j, k0)));
@@ -118,8 +116,7 @@ pub(crate) unsafe fn sweep_wall_run<T: Real, C: Collider<T>>(
             f.fill([0.0; 2]);
             for i in 0..Q {
                 if let Some((s, _)) = wall[i] {
-                    // Momentum exchange: the solid receives −(f*_ī + f_i) c_i (Ladd 1994).
-                    let m = back[i].0[l].to_f64() + h[i].0[l].to_f64() + 2.0 * W[i];
+                    let m = exchanged_momentum(i, back[i].0[l].to_f64(), h[i].0[l].to_f64());
                     f[s][0] -= m * CX[i] as f64;
                     f[s][1] -= m * CY[i] as f64;
                 }
