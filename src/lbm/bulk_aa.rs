@@ -5,7 +5,7 @@
 
 use super::boundary::Access;
 use super::collision::Collider;
-use super::d2q9::{OPP, Q};
+use super::d2q9::{each_direction, OPP, Q};
 use super::lanes::{has_avx512, prefetch_ahead, Lanes};
 use super::partial::PartialSweep;
 use super::real::Real;
@@ -86,17 +86,18 @@ unsafe fn run_pointers<T: Real>(base: *mut T, acc: Access, k0: usize) -> [*mut T
     std::array::from_fn(|i| base.add(acc.pulled(i, k0)))
 }
 
-/// Load `LANES` cells from `k` on of each stream.
+/// Load `LANES` cells from `k` on of each stream into `h`: in place, since an array
+/// returned by value is built in a scratch and copied over in wider vectors than it was
+/// written with, which stalls each chunk on store forwarding.
 #[inline(always)]
 unsafe fn load_lanes<T: Real, const LANES: usize>(
     ld: &[*mut T; Q],
     k: usize,
-) -> [Lanes<T, LANES>; Q] {
-    std::array::from_fn(|i| {
-        let mut v = [T::default(); LANES];
-        std::ptr::copy_nonoverlapping(ld[i].add(k), v.as_mut_ptr(), LANES);
-        Lanes(v)
-    })
+    h: &mut [Lanes<T, LANES>; Q],
+) {
+    each_direction!(i => {
+        std::ptr::copy_nonoverlapping(ld[i].add(k), h[i].0.as_mut_ptr(), LANES);
+    });
 }
 
 /// Store `LANES` cells from `k` on: direction j where direction opp(j) was loaded.
@@ -106,9 +107,9 @@ unsafe fn store_lanes<T: Real, const LANES: usize>(
     k: usize,
     h: &[Lanes<T, LANES>; Q],
 ) {
-    for j in 0..Q {
+    each_direction!(j => {
         std::ptr::copy_nonoverlapping(h[j].0.as_ptr(), ld[OPP[j]].add(k), LANES);
-    }
+    });
 }
 
 /// The bulk cells `[k0, k0 + n)` of one row, in place, `LANES` at a time (scalar for the
@@ -189,8 +190,8 @@ unsafe fn bulk_run_aa_partial<T: Real, C: Collider<T>, const LANES: usize>(
     let mut k = 0;
     while k + LANES <= n {
         prefetch_ahead(&ld.map(|p| p as *const T), k);
-        let mut h = load_lanes::<T, LANES>(&ld, k);
-        let pre = h;
+        let mut h = [Lanes([zero; LANES]); Q];
+        load_lanes(&ld, k, &mut h);
         let m = c.collide(&mut h);
         if next < k + LANES {
             let first = cells.start;
@@ -198,6 +199,11 @@ unsafe fn bulk_run_aa_partial<T: Real, C: Collider<T>, const LANES: usize>(
                 cells.start += 1;
                 next = offset(cells.start);
             }
+            // The pre-collision values loaded again (still in the buffer, and in L1): a copy
+            // kept across the collision went through the stack in vectors of another width,
+            // which stalled every chunk on store forwarding.
+            let mut pre = [Lanes([zero; LANES]); Q];
+            load_lanes(&ld, k, &mut pre);
             p.blend_lanes(first..cells.start, k0 + k, &pre, &mut h, &m);
         }
         store_lanes(&ld, k, &h);

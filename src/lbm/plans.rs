@@ -211,7 +211,8 @@ impl PsmPlan {
 /// boxes and groups before the sweep; a backend that can (see
 /// [`crate::lbm::FluidBackend::sums_per_body`]) fills `sums` and `counts` and sets `made`; a
 /// device backend leaves the per-link or per-share momenta empty, the CPU's in-place sweep
-/// sums only some bodies (see `body_slot`) and reports every share's momentum. Each slot is
+/// sums only some bodies (see `body_slot`) and reports the momenta of the others' shares
+/// (a summed body's entries may be left as they were). Each slot is
 /// summed over the cells of its column in increasing row (the group's bodies in turn, in
 /// increasing first row), each cell's links or shares in plan order: the order of a serial
 /// walk of the plan restricted to the slot, so it does not depend on how the lattice is
@@ -239,8 +240,8 @@ pub struct BodyColumns {
     pub counts: Vec<u32>,
     /// Out: the backend made the sums.
     pub made: bool,
-    /// Out, from a backend that sums only some bodies (the CPU's in-place sweep, which also
-    /// reports every share's momentum): per body, the slot of its group's local column 0 (a
+    /// Out, from a backend that sums only some bodies (the CPU's in-place sweep, which
+    /// reports the momenta of the others' shares): per body, the slot of its group's local column 0 (a
     /// cell of local column x added to slot `body_slot[b] + x`), or [`NO_SLOT`] for a body
     /// it did not sum, whose shares the host collects from their momenta. Empty when every
     /// body was summed (a device backend).
