@@ -3,8 +3,8 @@
 //! the exact solid fraction.
 
 use super::exchange::Coupler;
-use super::gather::{gather, group_by_row, row_of, Shared};
-use super::geometry::{box_lines, column_line, row_line, CellAreas};
+use super::gather::{group_by_row, row_of, Shared};
+use super::geometry::{box_lines, column_line, row_line, CellAreas, ColumnLine, RowLine};
 use super::map::{share_rows, shares_in_row, GrainView, Share};
 use crate::lbm::moving::{SolidShare, NO_SLOT};
 use crate::lbm::{Lattice, Real};
@@ -32,9 +32,14 @@ impl Coupler {
     pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
         let fluid = |k: usize| lat.is_fluid_at(k);
-        // The grain images that reach the slab's rows, and each one's rows.
+        // The grain images that reach the slab's rows, each one's rows, and where its line
+        // tables start (a box's lines are counted here, so the tables take one parallel
+        // pass: each pass costs the pool a wake-up).
         self.disk_images.clear();
         self.row_images.clear();
+        self.column_start.clear();
+        self.row_start.clear();
+        let (mut n_columns, mut n_rows) = (0u32, 0u32);
         for (g, grain) in views.iter().enumerate() {
             for c in f.images(grain) {
                 let (ya, yb) = share_rows(&f, c, grain.radius);
@@ -46,37 +51,48 @@ impl Coupler {
                 for y in ya..=yb {
                     self.row_images.push((image, y as u32));
                 }
+                self.column_start.push(n_columns);
+                self.row_start.push(n_rows);
+                n_columns += box_lines(c[0], grain.radius).1 as u32;
+                n_rows += box_lines(c[1], grain.radius).1 as u32;
             }
         }
-        // Each image's line tables.
+        self.column_start.push(n_columns);
+        self.row_start.push(n_rows);
+        // Each image's line tables. Every entry is written below, so only entries beyond
+        // the old length need a value first.
         let disks = &self.disk_images;
         let radius = |i: usize| views[disks[i].0 as usize].radius;
-        gather(
-            disks.len(),
-            &mut self.column_start,
-            &mut self.column_lines,
-            |i| box_lines(disks[i].1[0], radius(i)).1,
-            |i, out| {
+        self.column_lines
+            .resize(n_columns as usize, ColumnLine::default());
+        self.row_lines.resize(n_rows as usize, RowLine::default());
+        let (to_columns, to_rows) = (
+            Shared(self.column_lines.as_mut_ptr()),
+            Shared(self.row_lines.as_mut_ptr()),
+        );
+        let (column_start, row_start) = (&self.column_start, &self.row_start);
+        (0..disks.len())
+            .into_par_iter()
+            .with_min_len(64)
+            .for_each(|i| {
                 let (c, r) = (disks[i].1, radius(i));
-                let x_lo = box_lines(c[0], r).0;
-                for (j, line) in out.iter_mut().enumerate() {
+                // SAFETY: image i's entries [start[i], start[i + 1]) of each table are
+                // disjoint from every other image's and inside the table, which nothing
+                // else touches during the pass.
+                let (columns, rows) = unsafe {
+                    (
+                        row_of(&to_columns, column_start, i),
+                        row_of(&to_rows, row_start, i),
+                    )
+                };
+                let (x_lo, y_lo) = (box_lines(c[0], r).0, box_lines(c[1], r).0);
+                for (j, line) in columns.iter_mut().enumerate() {
                     *line = column_line(c, r, (x_lo + j as i64) as f64);
                 }
-            },
-        );
-        gather(
-            disks.len(),
-            &mut self.row_start,
-            &mut self.row_lines,
-            |i| box_lines(disks[i].1[1], radius(i)).1,
-            |i, out| {
-                let (c, r) = (disks[i].1, radius(i));
-                let y_lo = box_lines(c[1], r).0;
-                for (m, line) in out.iter_mut().enumerate() {
+                for (m, line) in rows.iter_mut().enumerate() {
                     *line = row_line(c, r, (y_lo + m as i64) as f64);
                 }
-            },
-        );
+            });
         let (columns, rows) = (
             (&self.column_start, &self.column_lines),
             (&self.row_start, &self.row_lines),
