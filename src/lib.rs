@@ -22,3 +22,5 @@ pub mod run_mpm;
 pub mod scene;
 pub mod simulation;
 pub mod stability;
+#[cfg(test)]
+pub(crate) mod test_rng;

@@ -233,12 +233,7 @@ mod tests {
     fn line_tables_give_the_exact_cell_areas() {
         // Radii from under a cell to 40 cells, centres on and off the grid lines.
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = || crate::test_rng::next(&mut seed);
         let mut cases: Vec<([f64; 2], f64)> = vec![
             ([10.0, 10.0], 3.0),
             ([10.5, 10.5], 2.5),

@@ -5,13 +5,7 @@ use super::exchange::Coupler;
 use super::map::{cover, GrainView, SlabFrame};
 use super::{Refill, Scheme};
 
-/// A small deterministic generator in [0, 1) (no test-only crate needed).
-pub fn next(s: &mut u64) -> f64 {
-    *s ^= *s << 13;
-    *s ^= *s >> 7;
-    *s ^= *s << 17;
-    (*s >> 11) as f64 / (1u64 << 53) as f64
-}
+pub use crate::test_rng::next;
 
 /// Test slab `case`: 70 + case columns starting at global column 23 (case mod 3) of a
 /// 160-column lattice, 60 rows, periodic on both axes for even cases; with its solid

@@ -12,7 +12,7 @@
 //! |Π^neq| = √(Π^neq:Π^neq), the momentum-flux non-equilibrium. It follows from
 //! ν_t = (C Δ)² |S| with |S| = √(2 S:S) and S = −Π^neq/(2ρ c_s² τ).
 
-use super::d2q9::{by_direction, CX, CY, Q, W};
+use super::d2q9::{CX, CY, Q, W};
 use super::lanes::Simd;
 use super::real::Real;
 
@@ -157,18 +157,13 @@ pub fn moments<T: Real>(h: &[T; Q], force: [T; 2]) -> Moments<T> {
 /// relaxation).
 #[inline(always)]
 pub fn equilibrium<V: Simd>(m: &Moments<V>) -> [V; Q] {
-    let usq = m.ux * m.ux + m.uy * m.uy;
-    by_direction!(i => equilibrium_along(m, usq, i))
-}
-
-/// Direction `i`'s entry of [`equilibrium`], given u² = `usq` (m.ux² + m.uy², summed in that
-/// order): the same operations, so the same bits (Qian et al. 1992, eq. 7, shifted by w_i).
-#[inline(always)]
-pub(crate) fn equilibrium_along<V: Simd>(m: &Moments<V>, usq: V, i: usize) -> V {
     let s = |v: f64| V::splat(V::Scalar::from_f64(v));
-    let cu = s(CX[i] as f64) * m.ux + s(CY[i] as f64) * m.uy;
-    let poly = s(3.0) * cu + s(4.5) * cu * cu - s(1.5) * usq;
-    s(W[i]) * (m.drho + m.rho * poly)
+    let usq = m.ux * m.ux + m.uy * m.uy;
+    std::array::from_fn(|i| {
+        let cu = s(CX[i] as f64) * m.ux + s(CY[i] as f64) * m.uy;
+        let poly = s(3.0) * cu + s(4.5) * cu * cu - s(1.5) * usq;
+        s(W[i]) * (m.drho + m.rho * poly)
+    })
 }
 
 /// Smagorinsky relaxation time from the non-equilibrium momentum flux (Hou et al. 1996).

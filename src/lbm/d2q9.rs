@@ -40,53 +40,9 @@ pub const fn rotate(i: usize, quarter_turns: usize) -> usize {
     }
 }
 
-/// `$body` once for each direction `$i` = 0, …, 8 in turn, written out with `$i` a literal:
-/// no loop is left for the optimiser to keep, so arrays indexed by `$i` (or by a table
-/// entry such as `OPP[$i]`) stay in registers in the SIMD kernels.
-macro_rules! each_direction {
-    ($i:ident => $body:block) => {{
-        {
-            let $i: usize = 0;
-            $body
-        }
-        {
-            let $i: usize = 1;
-            $body
-        }
-        {
-            let $i: usize = 2;
-            $body
-        }
-        {
-            let $i: usize = 3;
-            $body
-        }
-        {
-            let $i: usize = 4;
-            $body
-        }
-        {
-            let $i: usize = 5;
-            $body
-        }
-        {
-            let $i: usize = 6;
-            $body
-        }
-        {
-            let $i: usize = 7;
-            $body
-        }
-        {
-            let $i: usize = 8;
-            $body
-        }
-    }};
-}
-pub(crate) use each_direction;
-
-/// The array `[f(0), …, f(8)]` of `$e` with `$i` each direction in turn, written out as
-/// [`each_direction`] does.
+/// The array `[f(0), …, f(8)]` of `$e` with `$i` each direction in turn, written out with
+/// `$i` a literal: no loop is left for the optimiser to keep, so arrays indexed by `$i` (or
+/// by a table entry such as `OPP[$i]`) stay in registers in the SIMD kernels.
 macro_rules! by_direction {
     ($i:ident => $e:expr) => {
         [
@@ -103,6 +59,15 @@ macro_rules! by_direction {
     };
 }
 pub(crate) use by_direction;
+
+/// `$body` once for each direction `$i` = 0, …, 8 in turn, written out as
+/// [`by_direction`] writes them (an array's elements are evaluated in order).
+macro_rules! each_direction {
+    ($i:ident => $body:block) => {{
+        let _: [(); 9] = $crate::lbm::d2q9::by_direction!($i => $body);
+    }};
+}
+pub(crate) use each_direction;
 
 #[cfg(test)]
 mod tests {

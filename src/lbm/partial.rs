@@ -9,7 +9,7 @@ use super::d2q9::{by_direction, each_direction, OPP, Q, W};
 use super::lanes::{Lanes, Simd};
 use super::lattice::Lattice;
 use super::moving::{pull, Disjoint};
-use super::plans::{cell_centre, PsmPlan, NO_SLOT};
+use super::plans::{PsmPlan, NO_SLOT};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -203,18 +203,8 @@ struct Stretch {
     mask: u32,
     /// The body (index into `PsmPlan::bodies`).
     body: usize,
-    /// Global x of lane 0's cell.
-    x0: i64,
     /// Local x of lane 0's cell.
     local_x0: usize,
-}
-
-impl Stretch {
-    /// Global x of the centre of lane `l`'s cell, (x + x0) + ½ as [`cell_centre`] forms it.
-    #[inline(always)]
-    fn centre_x(&self, l: usize) -> f64 {
-        (self.x0 + l as i64) as f64 + 0.5
-    }
 }
 
 impl<'a> PartialSweep<'a> {
@@ -254,31 +244,61 @@ impl<'a> PartialSweep<'a> {
     /// its block belong.
     #[inline(always)]
     unsafe fn sum_share(&self, s: usize, k: usize, y: usize, p: [f64; 2]) {
+        let x = k - (y + 1) * self.stride - 1;
+        self.sum_run(self.plan.shares[s].body as usize, y, x, 1, |_| p);
+    }
+
+    /// Add the loads of the shares of `body` in the `cells` consecutive cells of local row
+    /// `y` from local column `x` on (the j-th took momentum `momentum(j)` from the fluid)
+    /// to the body's slots of their columns, when the sums take that body (a sweep by
+    /// blocks of rows, see [`ShareSums`]): [p_x, p_y, r × p] with r the arm from the body's
+    /// image centre to the cell's. Returns whether it did.
+    ///
+    /// # Safety
+    /// Row `y` is swept by the calling task, to which the slots of the bodies with one in
+    /// its block belong.
+    #[inline(always)]
+    unsafe fn sum_run(
+        &self,
+        body: usize,
+        y: usize,
+        x: usize,
+        cells: usize,
+        momentum: impl Fn(usize) -> [f64; 2],
+    ) -> bool {
         let Some(t) = &self.sums else {
-            return;
+            return false;
         };
-        let plan = self.plan;
-        let body = plan.shares[s].body as usize;
         let slot0 = t.body_slot[body];
         if slot0 == NO_SLOT {
-            return;
+            return false;
         }
         // A share outside its body's box could be in another task's block or column.
-        let x = k - (y + 1) * self.stride - 1;
         let bx = t.boxes[body];
         assert!(
-            (bx[0] as usize..(bx[0] + bx[1]) as usize).contains(&x)
+            bx[0] as usize <= x
+                && x + cells <= (bx[0] + bx[1]) as usize
                 && (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
             "a share outside its body's box"
         );
-        // The arm from the image's centre to the cell's.
-        let image = plan.bodies[body].centre;
-        let centre = cell_centre(self.stride, plan.x0, k, y);
-        t.add(
-            (slot0 + x as i64) as usize,
-            [centre[0] - image[0], centre[1] - image[1]],
-            p,
-        );
+        let image = self.plan.bodies[body].centre;
+        let arm_y = (y as f64 + 0.5) - image[1];
+        for j in 0..cells {
+            let arm_x = self.centre_x(x + j) - image[0];
+            t.add(
+                (slot0 + (x + j) as i64) as usize,
+                [arm_x, arm_y],
+                momentum(j),
+            );
+        }
+        true
+    }
+
+    /// Global x of the centre of the cell in local column `x`, (x + x0) + ½ as
+    /// [`super::plans::cell_centre`] forms it.
+    #[inline(always)]
+    fn centre_x(&self, x: usize) -> f64 {
+        (x as i64 + self.plan.x0) as f64 + 0.5
     }
 
     /// Plan indices of local row `y`'s cells, in increasing padded index.
@@ -352,7 +372,7 @@ impl<'a> PartialSweep<'a> {
                 let r_y = (y as f64 + 0.5) - motion.centre[1];
                 let ux = T::from_f64(motion.velocity[0] - motion.omega * r_y);
                 let uy: [T; L] = std::array::from_fn(|l| {
-                    let r_x = st.centre_x(l) - motion.centre[0];
+                    let r_x = self.centre_x(st.local_x0 + l) - motion.centre[0];
                     T::from_f64(motion.velocity[1] + motion.omega * r_x)
                 });
                 (b_total, b, [ux; L], uy, st.mask)
@@ -397,7 +417,10 @@ impl<'a> PartialSweep<'a> {
             Some(st) => {
                 // A body summed here needs no momenta reported (see `BodyColumns`): its
                 // shares' entries are left as they were.
-                if !self.sum_stretch(&st, y, &momentum) {
+                let summed = self.sum_run(st.body, y, st.local_x0 + st.l0, st.cells, |j| {
+                    momentum(st.l0 + j)
+                });
+                if !summed {
                     for t in 0..st.cells {
                         self.mom.write(st.at0 + t, momentum(st.l0 + t));
                     }
@@ -457,9 +480,7 @@ impl<'a> PartialSweep<'a> {
         {
             return None;
         }
-        // Global x + ½ of lane 0's cell, as `cell_centre` forms it.
         let y = PsmPlan::row_of(self.stride, k);
-        let x0 = k as i64 - ((y + 1) * self.stride) as i64 - 1 + plan.x0;
         Some(Stretch {
             n0,
             at0,
@@ -467,53 +488,8 @@ impl<'a> PartialSweep<'a> {
             cells: count,
             mask: (((1u64 << count) - 1) << l0) as u32,
             body: body as usize,
-            x0,
             local_x0: k - (y + 1) * self.stride - 1,
         })
-    }
-
-    /// Add the loads of a [`Stretch`]'s shares (their momenta `momentum(lane)`) to its
-    /// body's slots when the sums take that body: [`Self::sum_share`] for each cell in
-    /// turn, with the body looked up once. Returns whether it did.
-    ///
-    /// # Safety
-    /// As [`Self::sum_share`], for row `y`.
-    #[inline(always)]
-    unsafe fn sum_stretch(
-        &self,
-        st: &Stretch,
-        y: usize,
-        momentum: &impl Fn(usize) -> [f64; 2],
-    ) -> bool {
-        let Some(t) = &self.sums else {
-            return false;
-        };
-        let slot0 = t.body_slot[st.body];
-        if slot0 == NO_SLOT {
-            return false;
-        }
-        // A share outside its body's box could be in another task's block or column.
-        let (xa, xb) = (st.local_x0 + st.l0, st.local_x0 + st.l0 + st.cells);
-        let bx = t.boxes[st.body];
-        assert!(
-            bx[0] as usize <= xa
-                && xb <= (bx[0] + bx[1]) as usize
-                && (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
-            "a share outside its body's box"
-        );
-        // The arm from the image's centre to each cell's, as `sum_share` takes it.
-        let image = self.plan.bodies[st.body].centre;
-        let arm_y = (y as f64 + 0.5) - image[1];
-        for j in 0..st.cells {
-            let l = st.l0 + j;
-            let arm_x = st.centre_x(l) - image[0];
-            t.add(
-                (slot0 + (st.local_x0 + l) as i64) as usize,
-                [arm_x, arm_y],
-                momentum(l),
-            );
-        }
-        true
     }
 
     /// [`Self::blend_lanes`] for a chunk that holds a cell of several shares: each plan
@@ -609,12 +585,7 @@ mod tests {
     #[test]
     fn solid_share_matches_the_nine_direction_form() {
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = || crate::test_rng::next(&mut seed) - 0.5;
         for _ in 0..200 {
             // Populations near rest, fluid and solid velocities up to Ma ≈ 0.2.
             let h: [f64; Q] = std::array::from_fn(|_| 0.02 * next());

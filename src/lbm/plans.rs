@@ -241,8 +241,8 @@ pub struct BodyColumns {
     /// Out: the backend made the sums.
     pub made: bool,
     /// Out, from a backend that sums only some bodies (the CPU's in-place sweep, which
-    /// reports the momenta of the others' shares): per body, the slot of its group's local column 0 (a
-    /// cell of local column x added to slot `body_slot[b] + x`), or [`NO_SLOT`] for a body
+    /// reports the momenta of the others' shares): per body, the slot of its group's local
+    /// column 0 (a cell of local column x added to slot `body_slot[b] + x`), or [`NO_SLOT`] for a body
     /// it did not sum, whose shares the host collects from their momenta. Empty when every
     /// body was summed (a device backend).
     pub body_slot: Vec<i64>,

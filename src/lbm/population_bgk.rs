@@ -105,12 +105,7 @@ mod tests {
     #[test]
     fn matches_moment_space_bgk() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rnd = || crate::test_rng::next(&mut seed) - 0.5;
         for (tau, force) in [0.5001, 0.53, 0.8, 1.7]
             .into_iter()
             .flat_map(|t| [(t, [0.0, 0.0]), (t, [3e-5, -1e-4])])
