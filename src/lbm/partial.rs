@@ -165,23 +165,17 @@ pub(crate) struct ShareSums<'a> {
 }
 
 impl ShareSums<'_> {
-    /// Add the load of a share that took momentum `p` from the fluid, at arm `arm` from
-    /// its body's centre to the cell's, to slot `slot`: [p_x, p_y, r × p] (seed eqs.
-    /// 5.53–5.54), the first load of a slot on 0.0 (as the host collect adds), in the host
-    /// collect's arithmetic (`coupling/psm.rs`).
+    /// Add `load` ([p_x, p_y, torque] of a share, seed eqs. 5.53–5.54) to slot `slot` and
+    /// count it, in the host collect's arithmetic (`coupling/psm.rs`): the slots start at
+    /// +0.0 (`MovingRun::new`), so the first load is 0.0 + load, as the host adds.
     ///
     /// # Safety
     /// The slot belongs to the calling task.
     #[inline(always)]
-    unsafe fn add(&self, slot: usize, arm: [f64; 2], p: [f64; 2]) {
-        let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];
+    unsafe fn add(&self, slot: usize, load: [f64; 3]) {
         let (sum, n) = (&mut *self.sums.0.add(slot), &mut *self.counts.0.add(slot));
-        if *n == 0 {
-            *sum = [0.0 + load[0], 0.0 + load[1], 0.0 + load[2]];
-        } else {
-            for (a, l) in sum.iter_mut().zip(load) {
-                *a += l;
-            }
+        for (a, l) in sum.iter_mut().zip(load) {
+            *a += l;
         }
         *n += 1;
     }
@@ -235,43 +229,44 @@ impl<'a> PartialSweep<'a> {
     }
 
     /// Add the load of plan share `s`, which took momentum `p` from the fluid at the cell at
-    /// padded index `k` in local row `y`, to its body's slot of the cell's column when its
-    /// body has one in the sums (a sweep by blocks of rows, see [`ShareSums`]); nothing
-    /// otherwise.
+    /// padded index `k` in local row `y`, to its body's slot of the cell's column when the
+    /// sums take that body (a sweep by blocks of rows, see [`ShareSums`]): [p_x, p_y, r × p]
+    /// with r the arm from the body's image centre to the cell's. Returns whether it did.
     ///
     /// # Safety
     /// Row `y` is swept by the calling task, to which the slots of the bodies with one in
     /// its block belong.
     #[inline(always)]
-    unsafe fn sum_share(&self, s: usize, k: usize, y: usize, p: [f64; 2]) {
+    unsafe fn sum_share(&self, s: usize, k: usize, y: usize, p: [f64; 2]) -> bool {
         let x = k - (y + 1) * self.stride - 1;
-        self.sum_run(self.plan.shares[s].body as usize, y, x, 1, |_| p);
+        let body = self.plan.shares[s].body as usize;
+        let Some((t, slot0)) = self.slots_of(body, y, x, 1) else {
+            return false;
+        };
+        let image = self.plan.bodies[body].centre;
+        let arm = [self.centre_x(x) - image[0], (y as f64 + 0.5) - image[1]];
+        t.add(
+            (slot0 + x as i64) as usize,
+            [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]],
+        );
+        true
     }
 
-    /// Add the loads of the shares of `body` in the `cells` consecutive cells of local row
-    /// `y` from local column `x` on (the j-th took momentum `momentum(j)` from the fluid)
-    /// to the body's slots of their columns, when the sums take that body (a sweep by
-    /// blocks of rows, see [`ShareSums`]): [p_x, p_y, r × p] with r the arm from the body's
-    /// image centre to the cell's. Returns whether it did.
-    ///
-    /// # Safety
-    /// Row `y` is swept by the calling task, to which the slots of the bodies with one in
-    /// its block belong.
+    /// The sums and the slot of local column 0 of `body`, when the sums take that body, for
+    /// `cells` of its shares from local column `x` of local row `y` on (checked to lie in
+    /// the body's box).
     #[inline(always)]
-    unsafe fn sum_run(
+    fn slots_of(
         &self,
         body: usize,
         y: usize,
         x: usize,
         cells: usize,
-        momentum: impl Fn(usize) -> [f64; 2],
-    ) -> bool {
-        let Some(t) = &self.sums else {
-            return false;
-        };
+    ) -> Option<(&ShareSums<'a>, i64)> {
+        let t = self.sums.as_ref()?;
         let slot0 = t.body_slot[body];
         if slot0 == NO_SLOT {
-            return false;
+            return None;
         }
         // A share outside its body's box could be in another task's block or column.
         let bx = t.boxes[body];
@@ -281,15 +276,35 @@ impl<'a> PartialSweep<'a> {
                 && (bx[2] as usize..(bx[2] + bx[3]) as usize).contains(&y),
             "a share outside its body's box"
         );
-        let image = self.plan.bodies[body].centre;
-        let arm_y = (y as f64 + 0.5) - image[1];
-        for j in 0..cells {
-            let arm_x = self.centre_x(x + j) - image[0];
-            t.add(
-                (slot0 + (x + j) as i64) as usize,
-                [arm_x, arm_y],
-                momentum(j),
-            );
+        Some((t, slot0))
+    }
+
+    /// Add the loads of the cells of stretch `st` (in local row `y`) to its body's slots of
+    /// their columns, when the sums take that body, as [`Self::sum_share`] adds one: formed
+    /// in lanes from the arms' x (`arm_x`) and the momenta the fluid gained (`p`), then
+    /// added one cell at a time. Returns whether it did.
+    ///
+    /// # Safety
+    /// As [`Self::sum_share`].
+    #[inline(always)]
+    unsafe fn sum_stretch<T: Real, const L: usize>(
+        &self,
+        st: &Stretch,
+        y: usize,
+        arm_x: &[f64; L],
+        p: &[Lanes<T, L>; 2],
+    ) -> bool {
+        let Some((t, slot0)) = self.slots_of(st.body, y, st.local_x0 + st.l0, st.cells) else {
+            return false;
+        };
+        let arm_y = (y as f64 + 0.5) - self.plan.bodies[st.body].centre[1];
+        // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
+        let px: [f64; L] = std::array::from_fn(|l| -p[0].0[l].to_f64());
+        let py: [f64; L] = std::array::from_fn(|l| -p[1].0[l].to_f64());
+        let torque: [f64; L] = std::array::from_fn(|l| arm_x[l] * py[l] - arm_y * px[l]);
+        let lane0 = (slot0 + st.local_x0 as i64) as usize;
+        for l in st.l0..st.l0 + st.cells {
+            t.add(lane0 + l, [px[l], py[l], torque[l]]);
         }
         true
     }
@@ -360,20 +375,27 @@ impl<'a> PartialSweep<'a> {
         let y = PsmPlan::row_of(self.stride, k);
         let zero = T::default();
         let stretch = self.one_body_stretch::<L>(cells.clone(), k);
+        // Per lane: the arm's x from the stretch body's centre to the cell's (stretches only).
+        let mut arm_x = [0.0f64; L];
         let (b_total, b, ux, uy, mask) = match &stretch {
             Some(st) => {
                 let motion = &plan.bodies[st.body];
                 // Each lane's plan cell, share and centre, as if the stretch filled the
-                // chunk (the lanes outside it are masked off below): loaded and computed
-                // lane by lane in registers, in `PsmPlan::velocity`'s arithmetic.
+                // chunk (the lanes outside it are masked off below): taken as whole
+                // windows (one bounds check each) and computed in lanes, in
+                // `PsmPlan::velocity`'s arithmetic.
                 let (bn, bs) = (st.n0 - st.l0, st.at0 - st.l0);
-                let b_total: [T; L] = std::array::from_fn(|l| T::from_f64(plan.total[bn + l]));
-                let b: [T; L] = std::array::from_fn(|l| T::from_f64(plan.shares[bs + l].b));
+                let (total, shares) = (&plan.total[bn..bn + L], &plan.shares[bs..bs + L]);
+                let b_total: [T; L] = std::array::from_fn(|l| T::from_f64(total[l]));
+                let b: [T; L] = std::array::from_fn(|l| T::from_f64(shares[l].b));
                 let r_y = (y as f64 + 0.5) - motion.centre[1];
                 let ux = T::from_f64(motion.velocity[0] - motion.omega * r_y);
+                // Lane l's centre x, ((x₀ + l) + x0) + ½, is the lane-0 centre plus l
+                // exactly (whole numbers and halves, far below 2⁵²).
+                let centre0 = self.centre_x(st.local_x0);
+                arm_x = std::array::from_fn(|l| (centre0 + l as f64) - motion.centre[0]);
                 let uy: [T; L] = std::array::from_fn(|l| {
-                    let r_x = self.centre_x(st.local_x0 + l) - motion.centre[0];
-                    T::from_f64(motion.velocity[1] + motion.omega * r_x)
+                    T::from_f64(motion.velocity[1] + motion.omega * arm_x[l])
                 });
                 (b_total, b, [ux; L], uy, st.mask)
             }
@@ -417,9 +439,7 @@ impl<'a> PartialSweep<'a> {
             Some(st) => {
                 // A body summed here needs no momenta reported (see `BodyColumns`): its
                 // shares' entries are left as they were.
-                let summed = self.sum_run(st.body, y, st.local_x0 + st.l0, st.cells, |j| {
-                    momentum(st.l0 + j)
-                });
+                let summed = self.sum_stretch(&st, y, &arm_x, &p);
                 if !summed {
                     for t in 0..st.cells {
                         self.mom.write(st.at0 + t, momentum(st.l0 + t));
@@ -436,8 +456,10 @@ impl<'a> PartialSweep<'a> {
                     let l = plan.cells[n] as usize - k;
                     let at = plan.start[n] as usize;
                     let momentum = momentum(l);
-                    self.mom.write(at, momentum);
-                    self.sum_share(at, plan.cells[n] as usize, y, momentum);
+                    // A body summed here needs no momenta reported (see `BodyColumns`).
+                    if !self.sum_share(at, plan.cells[n] as usize, y, momentum) {
+                        self.mom.write(at, momentum);
+                    }
                     if ok >> l & 1 == 0 {
                         self.bad.fetch_min(n, Ordering::Relaxed);
                     }
