@@ -25,6 +25,8 @@ use super::real::Real;
 use super::wall_runs::sweep_wall_run;
 use decomposition::{Comm, Side};
 use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Populations that leave through the west face (c_x = −1) and the east face (c_x = +1).
 const WESTWARD: [usize; HALO_DIRS] = [3, 6, 7];
@@ -216,6 +218,7 @@ impl<T: Real> Lattice<T> {
         let mut slot_values = std::mem::take(&mut self.forces.values);
         let slots = Shared(slot_values.as_mut_ptr());
         let mut row_bad = std::mem::take(&mut self.row_bad);
+        let mut tasks = std::mem::take(&mut self.block_tasks);
         let this = &*self;
         let kernels = bulk_kernels::<T, C>();
         let sweep_row = |y: usize, bad: &mut u8| {
@@ -328,9 +331,20 @@ impl<T: Real> Lattice<T> {
             // blends the cells.
             None if block.is_some() => {
                 let h = block.expect("tested");
-                row_bad.par_chunks_mut(h).enumerate().for_each(|(b, bads)| {
-                    for (j, bad) in bads.iter_mut().enumerate() {
-                        sweep_row(b * h + j, bad);
+                let p = partial.as_ref().expect("a sweep that sums has a plan");
+                block_tasks(&mut tasks, this.ny, h, |y| !p.row(y).is_empty());
+                let bads = Shared(row_bad.as_mut_ptr());
+                let next = AtomicUsize::new(0);
+                // Each worker takes the next task until none is left: the blocks that hold
+                // plan cells first, the bands of plain rows last, so that the tasks that end
+                // the sweep are short ones.
+                let workers = rayon::current_num_threads().min(tasks.len());
+                (0..workers).into_par_iter().with_max_len(1).for_each(|_| {
+                    while let Some(rows) = tasks.get(next.fetch_add(1, Ordering::Relaxed)) {
+                        for y in rows.clone() {
+                            // SAFETY: the tasks' rows are disjoint, each taken once.
+                            sweep_row(y, unsafe { &mut *bads.ptr().add(y) });
+                        }
                     }
                 });
             }
@@ -374,6 +388,7 @@ impl<T: Real> Lattice<T> {
             }
         }
         self.row_bad = row_bad;
+        self.block_tasks = tasks;
         self.forces.values = slot_values;
     }
 
@@ -512,6 +527,92 @@ impl<T: Real> Lattice<T> {
             FaceCondition::FreeSlip => self.halo_index(inner, y, MIRROR_X[s]),
             FaceCondition::Outflow => self.halo_index(inner, y, s),
             _ => NONE,
+        }
+    }
+}
+
+/// The tasks of a sweep by blocks of `h` rows that sums loads per body (see
+/// `partial::ShareSums`), into `tasks`: within each block, the rows from its first to its
+/// last row that holds partially saturated cells (`planned(y)`) are one task, to be swept in
+/// increasing order (every body summed in the sweep lies there); the other rows go in bands
+/// of [`PLAIN_BAND`] rows. The blocks come first, the most rows first, then the bands, so
+/// that a pool that takes them in order ends the sweep on short tasks (the cost of a sweep
+/// by blocks sits where the grains are).
+fn block_tasks(
+    tasks: &mut Vec<Range<usize>>,
+    ny: usize,
+    h: usize,
+    planned: impl Fn(usize) -> bool,
+) {
+    // Each block's planned rows, first to last (empty for none).
+    let planned_rows = |b0: usize| {
+        let b1 = (b0 + h).min(ny);
+        match (b0..b1).find(|&y| planned(y)) {
+            Some(first) => first..(first..b1).rev().find(|&y| planned(y)).expect("one") + 1,
+            None => b0..b0,
+        }
+    };
+    let starts = (0..ny).step_by(h.max(1));
+    tasks.clear();
+    tasks.extend(starts.clone().map(planned_rows).filter(|r| !r.is_empty()));
+    tasks.sort_by_key(|r| std::cmp::Reverse(r.len()));
+    for b0 in starts {
+        let (b1, rows) = ((b0 + h).min(ny), planned_rows(b0));
+        let (a, e) = if rows.is_empty() {
+            (b1, b1)
+        } else {
+            (rows.start, rows.end)
+        };
+        for (from, to) in [(b0, a), (e, b1)] {
+            tasks.extend(
+                (from..to)
+                    .step_by(PLAIN_BAND)
+                    .map(|y| y..(y + PLAIN_BAND).min(to)),
+            );
+        }
+    }
+}
+
+/// Rows per task of the plain rows of a sweep by blocks ([`block_tasks`]).
+const PLAIN_BAND: usize = 16;
+
+#[cfg(test)]
+mod tests {
+    use super::{block_tasks, PLAIN_BAND};
+
+    /// The tasks cover every row once; each block's rows that hold plan cells are one task
+    /// (in order), the blocks come first, longest first, and the rest go in short bands.
+    #[test]
+    fn block_tasks_cover_the_rows_once_and_keep_each_blocks_cells_together() {
+        let mut tasks = Vec::new();
+        for (ny, h, planned) in [
+            (100, 32, vec![40..45, 50..60, 97..100]),
+            (64, 16, vec![]),
+            (50, 64, vec![0..1, 49..50]),
+            (33, 8, vec![3..4, 9..16, 17..18, 23..24, 24..25]),
+        ] {
+            let is_planned = |y: usize| planned.iter().any(|r| r.contains(&y));
+            block_tasks(&mut tasks, ny, h, is_planned);
+            let mut seen = vec![0; ny];
+            for t in &tasks {
+                assert!(!t.is_empty() && t.end <= ny, "{t:?}");
+                t.clone().for_each(|y| seen[y] += 1);
+            }
+            assert!(seen.iter().all(|&n| n == 1), "rows covered once: {seen:?}");
+            let blocks: Vec<_> = tasks.iter().take_while(|t| is_planned(t.start)).collect();
+            for b0 in (0..ny).step_by(h) {
+                let rows: Vec<_> = (b0..(b0 + h).min(ny)).filter(|&y| is_planned(y)).collect();
+                if let (Some(&first), Some(&last)) = (rows.first(), rows.last()) {
+                    assert!(
+                        blocks.iter().any(|t| t.start == first && t.end == last + 1),
+                        "block {b0}: rows {first}..={last} in one task of {tasks:?}"
+                    );
+                }
+            }
+            assert!(blocks.windows(2).all(|w| w[0].len() >= w[1].len()));
+            assert!(tasks[blocks.len()..]
+                .iter()
+                .all(|t| t.len() <= PLAIN_BAND && !t.clone().any(is_planned)));
         }
     }
 }

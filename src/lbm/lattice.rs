@@ -192,6 +192,8 @@ pub struct Lattice<T: Real> {
     /// Momentum exchanged by each special cell with each solid during the last step.
     pub(crate) forces: ForceSlots,
     pub(crate) row_bad: Vec<u8>,
+    /// The tasks of the last in-place sweep by blocks (kept for their allocation).
+    pub(crate) block_tasks: Vec<std::ops::Range<usize>>,
     pub(crate) step: u64,
     /// Factor applied to every Zou–He velocity face (start-up ramps).
     pub(crate) inlet_scale: f64,
@@ -369,6 +371,7 @@ impl<T: Real> Lattice<T> {
             ),
             forces,
             row_bad: vec![0; ny],
+            block_tasks: Vec::new(),
             step: 0,
             inlet_scale: 1.0,
             halo,
