@@ -291,6 +291,16 @@ fn plan_row(
     /// Cells planned together.
     const LANES: usize = 8;
     let weight = |e: f64| e * (tau - 0.5) / ((1.0 - e) + (tau - 0.5));
+    // B_s of a share of fraction f in a cell of ε and B; a cell whose overlap rounds to
+    // nothing stays plain fluid (the quotient is taken either way, so lanes can divide).
+    let split = |b: f64, f: f64, eps: f64| {
+        let q = b * f / eps;
+        if eps > 0.0 {
+            q
+        } else {
+            0.0
+        }
+    };
     let first = first as usize;
     let (mut c, mut j) = (0, 0);
     while j < row.len() {
@@ -303,15 +313,7 @@ fn plan_row(
             // A one-share cell's ε, summed as the general case sums it.
             let eps: [f64; LANES] = std::array::from_fn(|i| std::iter::once(f[i]).sum::<f64>());
             let b: [f64; LANES] = std::array::from_fn(|i| weight(eps[i].min(1.0)));
-            // Every lane divides (a lane of no overlap drops its quotient).
-            let bs: [f64; LANES] = std::array::from_fn(|i| {
-                let q = b[i] * f[i] / eps[i];
-                if eps[i] > 0.0 {
-                    q
-                } else {
-                    0.0
-                }
-            });
+            let bs: [f64; LANES] = std::array::from_fn(|i| split(b[i], f[i], eps[i]));
             let (o, ce, st, to) = (
                 &mut out[j..j + LANES],
                 &mut cells[c..c + LANES],
@@ -337,12 +339,7 @@ fn plan_row(
         let b = weight(eps.min(1.0));
         for (s, sh) in group.iter().enumerate() {
             out[j + s] = SolidShare {
-                // A cell whose overlap rounds to nothing stays plain fluid.
-                b: if eps > 0.0 {
-                    b * sh.fraction / eps
-                } else {
-                    0.0
-                },
+                b: split(b, sh.fraction, eps),
                 body: sh.image,
             };
         }

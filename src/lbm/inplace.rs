@@ -544,25 +544,20 @@ fn block_tasks(
     h: usize,
     planned: impl Fn(usize) -> bool,
 ) {
-    // Each block's planned rows, first to last (empty for none).
-    let planned_rows = |b0: usize| {
-        let b1 = (b0 + h).min(ny);
-        match (b0..b1).find(|&y| planned(y)) {
-            Some(first) => first..(first..b1).rev().find(|&y| planned(y)).expect("one") + 1,
-            None => b0..b0,
-        }
-    };
-    let starts = (0..ny).step_by(h.max(1));
     tasks.clear();
-    tasks.extend(starts.clone().map(planned_rows).filter(|r| !r.is_empty()));
-    tasks.sort_by_key(|r| std::cmp::Reverse(r.len()));
-    for b0 in starts {
-        let (b1, rows) = ((b0 + h).min(ny), planned_rows(b0));
-        let (a, e) = if rows.is_empty() {
-            (b1, b1)
-        } else {
-            (rows.start, rows.end)
+    for b0 in (0..ny).step_by(h.max(1)) {
+        let b1 = (b0 + h).min(ny);
+        // The block's planned rows, first to last (none: the block ends them).
+        let (a, e) = match (b0..b1).find(|&y| planned(y)) {
+            Some(first) => {
+                let last = (first..b1).rev().find(|&y| planned(y)).expect("first is");
+                (first, last + 1)
+            }
+            None => (b1, b1),
         };
+        if a < e {
+            tasks.push(a..e);
+        }
         for (from, to) in [(b0, a), (e, b1)] {
             tasks.extend(
                 (from..to)
@@ -571,6 +566,12 @@ fn block_tasks(
             );
         }
     }
+    // The blocks (each starts on a planned row) first, longest first; then the bands, in
+    // row order (the sort is stable).
+    tasks.sort_by_key(|r| {
+        let block = planned(r.start);
+        (!block, std::cmp::Reverse(if block { r.len() } else { 0 }))
+    });
 }
 
 /// Rows per task of the plain rows of a sweep by blocks ([`block_tasks`]).

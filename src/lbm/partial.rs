@@ -193,12 +193,18 @@ struct Stretch {
     l0: usize,
     /// How many cells.
     cells: usize,
-    /// Their lanes.
-    mask: u32,
     /// The body (index into `PsmPlan::bodies`).
     body: usize,
     /// Local x of lane 0's cell.
     local_x0: usize,
+}
+
+impl Stretch {
+    /// The stretch's lanes.
+    #[inline(always)]
+    fn mask(&self) -> u32 {
+        (((1u64 << self.cells) - 1) << self.l0) as u32
+    }
 }
 
 impl<'a> PartialSweep<'a> {
@@ -238,7 +244,7 @@ impl<'a> PartialSweep<'a> {
     /// its block belong.
     #[inline(always)]
     unsafe fn sum_share(&self, s: usize, k: usize, y: usize, p: [f64; 2]) -> bool {
-        let x = k - (y + 1) * self.stride - 1;
+        let x = self.local_x(k, y);
         let body = self.plan.shares[s].body as usize;
         let Some((t, slot0)) = self.slots_of(body, y, x, 1) else {
             return false;
@@ -281,32 +287,35 @@ impl<'a> PartialSweep<'a> {
 
     /// Add the loads of the cells of stretch `st` (in local row `y`) to its body's slots of
     /// their columns, when the sums take that body, as [`Self::sum_share`] adds one: formed
-    /// in lanes from the arms' x (`arm_x`) and the momenta the fluid gained (`p`), then
-    /// added one cell at a time. Returns whether it did.
+    /// in lanes from the arms' x (`arm_x`) and the shares' momenta (`[px, py]`, as the grain
+    /// receives them), then added one cell at a time. Returns whether it did.
     ///
     /// # Safety
     /// As [`Self::sum_share`].
     #[inline(always)]
-    unsafe fn sum_stretch<T: Real, const L: usize>(
+    unsafe fn sum_stretch<const L: usize>(
         &self,
         st: &Stretch,
         y: usize,
         arm_x: &[f64; L],
-        p: &[Lanes<T, L>; 2],
+        [px, py]: &[[f64; L]; 2],
     ) -> bool {
         let Some((t, slot0)) = self.slots_of(st.body, y, st.local_x0 + st.l0, st.cells) else {
             return false;
         };
         let arm_y = (y as f64 + 0.5) - self.plan.bodies[st.body].centre[1];
-        // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
-        let px: [f64; L] = std::array::from_fn(|l| -p[0].0[l].to_f64());
-        let py: [f64; L] = std::array::from_fn(|l| -p[1].0[l].to_f64());
         let torque: [f64; L] = std::array::from_fn(|l| arm_x[l] * py[l] - arm_y * px[l]);
         let lane0 = (slot0 + st.local_x0 as i64) as usize;
         for l in st.l0..st.l0 + st.cells {
             t.add(lane0 + l, [px[l], py[l], torque[l]]);
         }
         true
+    }
+
+    /// Local x of padded cell `k`, which lies in local row `y`.
+    #[inline(always)]
+    fn local_x(&self, k: usize, y: usize) -> usize {
+        k - (y + 1) * self.stride - 1
     }
 
     /// Global x of the centre of the cell in local column `x`, (x + x0) + ½ as
@@ -397,7 +406,7 @@ impl<'a> PartialSweep<'a> {
                 let uy: [T; L] = std::array::from_fn(|l| {
                     T::from_f64(motion.velocity[1] + motion.omega * arm_x[l])
                 });
-                (b_total, b, [ux; L], uy, st.mask)
+                (b_total, b, [ux; L], uy, st.mask())
             }
             None => {
                 let lane = |n: usize| plan.cells[n] as usize - k;
@@ -434,18 +443,20 @@ impl<'a> PartialSweep<'a> {
         each_direction!(i => {
             post[i] = Lanes::select(mask, new[i], post[i]);
         });
-        let momentum = |l: usize| [-p[0].0[l].to_f64(), -p[1].0[l].to_f64()];
+        // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
+        let loads: [[f64; L]; 2] = p.map(|v| std::array::from_fn(|l| -v.0[l].to_f64()));
+        let momentum = |l: usize| [loads[0][l], loads[1][l]];
         match stretch {
             Some(st) => {
                 // A body summed here needs no momenta reported (see `BodyColumns`): its
                 // shares' entries are left as they were.
-                let summed = self.sum_stretch(&st, y, &arm_x, &p);
+                let summed = self.sum_stretch(&st, y, &arm_x, &loads);
                 if !summed {
                     for t in 0..st.cells {
                         self.mom.write(st.at0 + t, momentum(st.l0 + t));
                     }
                 }
-                let bad = !ok & mask;
+                let bad = !ok & st.mask();
                 if bad != 0 {
                     let first = st.n0 + bad.trailing_zeros() as usize - st.l0;
                     self.bad.fetch_min(first, Ordering::Relaxed);
@@ -508,9 +519,8 @@ impl<'a> PartialSweep<'a> {
             at0,
             l0,
             cells: count,
-            mask: (((1u64 << count) - 1) << l0) as u32,
             body: body as usize,
-            local_x0: k - (y + 1) * self.stride - 1,
+            local_x0: self.local_x(k, y),
         })
     }
 
