@@ -56,7 +56,7 @@ impl Progress {
     pub fn update(&mut self, step: u64) {
         let every = (self.total / 10).max(1);
         if let Some(b) = &self.bar {
-            if step % 16 == 0 || step == self.total {
+            if step.is_multiple_of(16) || step == self.total {
                 b.set_position(step);
                 b.set_message(format!(
                     "t = {:.4e} s  {:.1} {}",
@@ -65,7 +65,9 @@ impl Progress {
                     self.unit
                 ));
             }
-        } else if self.log && (step % every == 0 || self.last_log.elapsed().as_secs() >= 30) {
+        } else if self.log
+            && (step.is_multiple_of(every) || self.last_log.elapsed().as_secs() >= 30)
+        {
             self.last_log = Instant::now();
             let el = self.start.elapsed().as_secs_f64();
             let eta = el / step as f64 * (self.total - step) as f64;

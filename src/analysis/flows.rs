@@ -223,7 +223,7 @@ pub fn ghia(
     // Centrelines at x = L/2 and y = L/2 (averaging the two straddling cells for even sizes).
     let line = |n: usize, at: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..n).map(at).collect() };
     let mid = |n: usize| {
-        if n % 2 == 0 {
+        if n.is_multiple_of(2) {
             (n / 2 - 1, n / 2)
         } else {
             (n / 2, n / 2)

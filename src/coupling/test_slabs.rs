@@ -11,7 +11,7 @@ pub use crate::test_rng::next;
 /// 160-column lattice, 60 rows, periodic on both axes for even cases; with its solid
 /// cells (every 89th padded cell).
 pub fn slab(case: usize) -> (SlabFrame, Vec<bool>) {
-    let periodic = case % 2 == 0;
+    let periodic = case.is_multiple_of(2);
     let f = SlabFrame {
         nx: 70 + case,
         ny: 60,

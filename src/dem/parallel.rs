@@ -227,7 +227,7 @@ impl SlabDem {
         let sys = &mut self.system;
         sys.grains.truncate(sys.owned);
         self.rebuilds += 1;
-        if self.rebalance_every > 0 && self.rebuilds % self.rebalance_every == 0 {
+        if self.rebalance_every > 0 && self.rebuilds.is_multiple_of(self.rebalance_every) {
             self.rebalance(comm);
         }
         // 1. Leavers, one message per neighbour per round; a grain moves one slab per

@@ -249,7 +249,7 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         self.pending_steps += 1;
         self.host.step += 1;
         self.host.cur ^= 1;
-        if self.host.step % CHECK_EVERY == 0 {
+        if self.host.step.is_multiple_of(CHECK_EVERY) {
             self.check(comm)?;
         }
         Ok(())

@@ -318,10 +318,10 @@ impl MpmSystem {
             t = Instant::now();
         };
         let spec = self.setup.spec;
-        if self.steps > 0 && self.steps % REBALANCE_EVERY == 0 {
+        if self.steps > 0 && self.steps.is_multiple_of(REBALANCE_EVERY) {
             self.rebalance(comm);
         }
-        self.sort(comm, self.steps % REORDER_EVERY == 0)?;
+        self.sort(comm, self.steps.is_multiple_of(REORDER_EVERY))?;
         lap(&mut self.seconds, 0);
         let (dt, cols, u) = (self.setup.dt, self.node_cols(), self.node_update());
         let (b, min_mass) = (self.setup.boundaries, self.min_mass);
