@@ -115,6 +115,33 @@ pub fn box_lines(c: f64, r: f64) -> (i64, usize) {
     (lo, (hi - lo + 2) as usize)
 }
 
+/// Entries past a disk's box that the partially saturated map adds to each column table,
+/// so a lane walk of a row ([`CellAreas::strips`]) may read beyond the box's last line
+/// (the lanes there are dropped).
+pub const TABLE_PAD: usize = 8;
+
+/// The lesser of `a` and `b` (`b` when they are equal or either is NaN): one vector
+/// instruction in lanes, where `f64::min` takes three (it must ignore a NaN). The
+/// exact-area code holds no NaN.
+#[inline(always)]
+pub fn lesser(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The greater of `a` and `b` (`b` when they are equal or either is NaN); see [`lesser`].
+#[inline(always)]
+pub fn greater(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
 /// A vertical grid line's entry in a disk's [`CellAreas`]: [s, G(s)], with s the line's
 /// offset from the centre clamped to [−r, r] and G(s) = ∫_{−r}^{s} √(r² − t²) dt, the
 /// area of the upper half-disk left of the line.
@@ -151,20 +178,27 @@ fn upper_area_left_of(s: f64, r: f64) -> f64 {
 /// height at abscissa t is h + min(v, h) for v ≥ 0 and max(0, v + h) for v < 0. For v ≥ 0,
 /// min(v, h) = v exactly where |t| < a; for v < 0, v + h > 0 exactly where |t| < a. So the
 /// integral over t < s takes G at s and ±a only (G(−a) = πr²/2 − G(a)).
-#[inline]
+#[inline(always)]
 fn corner_area(col: ColumnLine, row: RowLine, half: f64) -> f64 {
     let ([s, gs], [v, a, ga]) = (col, row);
-    if s <= -a {
-        // Left of the chord: whole columns of the disk below v ≥ 0, nothing below v < 0.
-        return if v >= 0.0 { 2.0 * gs } else { 0.0 };
-    }
-    let strip = v * (s.min(a) + a);
-    if v >= 0.0 {
-        // ∫ h + [∫_{−r}^{−a} h + v (min(s, a) + a) + ∫_a^{max(s, a)} h].
-        gs + (half - ga) + strip + if s > a { gs - ga } else { 0.0 }
+    // Both forms are evaluated and one kept (no branch on the data, so lanes of cells
+    // take it together: `CellAreas::strips`).
+    let strip = v * (lesser(s, a) + a);
+    // v ≥ 0: ∫ h + [∫_{−r}^{−a} h + v (min(s, a) + a) + ∫_a^{max(s, a)} h].
+    let upper = gs + (half - ga) + strip + if s > a { gs - ga } else { 0.0 };
+    // v < 0: ∫_{−a}^{min(s, a)} (v + h).
+    let lower = strip + lesser(gs, ga) - (half - ga);
+    // Left of the chord (s ≤ −a): whole columns of the disk below v ≥ 0, nothing below
+    // v < 0.
+    let (inside, left_of_chord) = if v >= 0.0 {
+        (upper, 2.0 * gs)
     } else {
-        // ∫_{−a}^{min(s, a)} (v + h).
-        strip + gs.min(ga) - (half - ga)
+        (lower, 0.0)
+    };
+    if s <= -a {
+        left_of_chord
+    } else {
+        inside
     }
 }
 
@@ -193,13 +227,40 @@ impl CellAreas<'_> {
     /// 1e-14 (1 + r²)).
     #[inline]
     pub fn fraction(&self, x: i64, y: i64) -> f64 {
+        Self::between(self.strip(x, y), self.strip(x + 1, y))
+    }
+
+    /// The disk's area in row `y` (between the horizontal lines y and y + 1) left of the
+    /// vertical line `x` (both lines inside the box). A cell's area is the difference of the
+    /// strips at its two vertical lines, so a run of cells in a row takes one strip per line.
+    #[inline]
+    pub fn strip(&self, x: i64, y: i64) -> f64 {
         let (j, m) = ((x - self.x_lo) as usize, (y - self.y_lo) as usize);
         let half = std::f64::consts::FRAC_PI_2 * self.radius * self.radius;
-        let (c0, c1) = (self.columns[j], self.columns[j + 1]);
+        let (col, r0, r1) = (self.columns[j], self.rows[m], self.rows[m + 1]);
+        corner_area(col, r1, half) - corner_area(col, r0, half)
+    }
+
+    /// [`CellAreas::strip`] at the `N` vertical lines from `x` on, in lanes (the same
+    /// arithmetic per lane). The column table must hold them: line `x + N − 1` may lie
+    /// past the box, where the partially saturated map pads each image's table
+    /// ([`TABLE_PAD`] entries).
+    #[inline(always)]
+    pub fn strips<const N: usize>(&self, x: i64, y: i64) -> [f64; N] {
+        let (j, m) = ((x - self.x_lo) as usize, (y - self.y_lo) as usize);
+        let half = std::f64::consts::FRAC_PI_2 * self.radius * self.radius;
         let (r0, r1) = (self.rows[m], self.rows[m + 1]);
-        // The strip between the rows, left of each column; their difference is the cell.
-        let left = corner_area(c0, r1, half) - corner_area(c0, r0, half);
-        let right = corner_area(c1, r1, half) - corner_area(c1, r0, half);
+        let columns = &self.columns[j..j + N];
+        let mut out = [0.0; N];
+        for l in 0..N {
+            out[l] = corner_area(columns[l], r1, half) - corner_area(columns[l], r0, half);
+        }
+        out
+    }
+
+    /// A cell's fraction from the strips at its left and right lines ([`CellAreas::strip`]).
+    #[inline]
+    pub fn between(left: f64, right: f64) -> f64 {
         (right - left).clamp(0.0, 1.0)
     }
 }

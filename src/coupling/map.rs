@@ -2,7 +2,7 @@
 //! bounce-back schemes) and how much of each cell it fills (the partially saturated
 //! method).
 
-use super::geometry::{covers, CellAreas};
+use super::geometry::covers;
 use crate::lbm::moving::RigidMotion;
 
 /// No grain covers the cell.
@@ -313,6 +313,7 @@ pub fn nearest_image_at(frame: &SlabFrame, g: &GrainView, p: [f64; 2]) -> (usize
 /// writes ~250 k of them per step on the seed's Table 5.3 case, and the plan reads them
 /// back).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)] // the AVX-512 row walk writes shares as two u64: fraction, then cell | image << 32
 pub struct Share {
     /// Solid fraction ε of the cell covered by this grain (exact disk–square area).
     pub fraction: f64,
@@ -321,52 +322,6 @@ pub struct Share {
     /// The grain image (its index in the map's list of images that reach the slab, each
     /// a grain and the centre the cell sees).
     pub image: u32,
-}
-
-/// Visit the shares in row `y` of grain image `image` (of `grain`, centred at `c`): every interior
-/// plain-fluid cell of that row it overlaps, in increasing x, with its exact solid fraction
-/// taken from `exact` (the image's [`CellAreas`]). Cells wholly inside or outside skip the
-/// exact area.
-#[allow(clippy::too_many_arguments)]
-pub fn shares_in_row(
-    frame: &SlabFrame,
-    fluid: &impl Fn(usize) -> bool,
-    grain: &GrainView,
-    image: u32,
-    c: [f64; 2],
-    y: i64,
-    exact: &CellAreas<'_>,
-    mut visit: impl FnMut(Share),
-) {
-    let r = grain.radius;
-    let x0 = frame.x0 as i64;
-    let xa = ((c[0] - r).floor() as i64 - x0).max(0);
-    let xb = ((c[0] + r).floor() as i64 - x0).min(frame.nx as i64 - 1);
-    // Nearest and farthest points of the cell from the centre.
-    let near = |lo: f64, v: f64| (v - lo.max(v.min(lo + 1.0))).abs();
-    let far = |lo: f64, v: f64| (v - lo).abs().max((v - lo - 1.0).abs());
-    for x in xa..=xb {
-        let k = frame.padded(x, y);
-        if !fluid(k) {
-            continue;
-        }
-        let gx = (x + x0) as f64;
-        let (nx_, ny_) = (near(gx, c[0]), near(y as f64, c[1]));
-        if nx_ * nx_ + ny_ * ny_ >= r * r {
-            continue;
-        }
-        let (fx_, fy_) = (far(gx, c[0]), far(y as f64, c[1]));
-        let fraction = if fx_ * fx_ + fy_ * fy_ <= r * r {
-            1.0
-        } else {
-            exact.fraction(x + x0, y)
-        };
-        visit(Share {
-            fraction,
-            cell: k as u32,
-            image,
-        });
-    }
 }
 
 /// The interior rows (first, last; empty when first > last) a disk at `c` with radius `r`

@@ -31,6 +31,7 @@ mod links;
 pub mod map;
 pub mod plan;
 mod psm;
+mod row_walk;
 pub mod sums;
 #[cfg(test)]
 mod test_slabs;

@@ -4,8 +4,11 @@
 
 use super::exchange::Coupler;
 use super::gather::{group_by_row, row_of, Shared};
-use super::geometry::{box_lines, column_line, row_line, CellAreas, ColumnLine, RowLine};
-use super::map::{share_rows, shares_in_row, GrainView, Share};
+use super::geometry::{
+    box_lines, column_line, row_line, CellAreas, ColumnLine, RowLine, TABLE_PAD,
+};
+use super::map::{share_rows, GrainView, Share};
+use super::row_walk::{prefetch_types, shares_in_row};
 use crate::lbm::moving::{SolidShare, NO_SLOT};
 use crate::lbm::{Lattice, Real};
 use rayon::prelude::*;
@@ -31,7 +34,6 @@ impl Coupler {
     /// root or arcsine.
     pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
         let f = self.frame;
-        let fluid = |k: usize| lat.is_fluid_at(k);
         // The grain images that reach the slab's rows, each one's rows, and where its line
         // tables start (a box's lines are counted here, so the tables take one parallel
         // pass: each pass costs the pool a wake-up).
@@ -53,7 +55,7 @@ impl Coupler {
                 }
                 self.column_start.push(n_columns);
                 self.row_start.push(n_rows);
-                n_columns += box_lines(c[0], grain.radius).1 as u32;
+                n_columns += (box_lines(c[0], grain.radius).1 + TABLE_PAD) as u32;
                 n_rows += box_lines(c[1], grain.radius).1 as u32;
             }
         }
@@ -86,9 +88,12 @@ impl Coupler {
                     )
                 };
                 let (x_lo, y_lo) = (box_lines(c[0], r).0, box_lines(c[1], r).0);
-                for (j, line) in columns.iter_mut().enumerate() {
+                let (box_columns, pad) = columns.split_at_mut(columns.len() - TABLE_PAD);
+                for (j, line) in box_columns.iter_mut().enumerate() {
                     *line = column_line(c, r, (x_lo + j as i64) as f64);
                 }
+                // Read only by lanes past the box, which are dropped: any finite value.
+                pad.fill(box_columns[box_columns.len() - 1]);
                 for (m, line) in rows.iter_mut().enumerate() {
                     *line = row_line(c, r, (y_lo + m as i64) as f64);
                 }
@@ -122,6 +127,7 @@ impl Coupler {
                 .map(|&i| images[i as usize].0 as usize)
         };
         // One pass per row, its shares still in cache when sorted and counted.
+        let (avx512, types) = (crate::lbm::lanes::has_avx512(), &lat.types[..]);
         self.share_rows.resize_with(f.ny, ShareRow::default);
         self.share_rows
             .par_iter_mut()
@@ -131,11 +137,12 @@ impl Coupler {
                 let out = &mut row.shares;
                 out.clear();
                 for i in in_row(y) {
+                    prefetch_types(&f, types, disks[i].1, radius(i), y as i64);
+                }
+                for i in in_row(y) {
                     let (g, c) = (disks[i].0 as usize, disks[i].1);
-                    let exact = areas(i);
-                    shares_in_row(&f, &fluid, &views[g], i as u32, c, y as i64, &exact, |s| {
-                        out.push(s)
-                    });
+                    let (r, exact) = (views[g].radius, areas(i));
+                    shares_in_row(avx512, &f, types, r, i as u32, c, y as i64, &exact, out);
                 }
                 // The row's images come in increasing index (grain order): sorting by
                 // (cell, image) keeps that order among a cell's shares.
