@@ -21,6 +21,8 @@
 use super::exchange::Coupler;
 use super::map::GrainView;
 use super::Scheme;
+use crate::lbm::moving::NO_SLOT;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Margin (cells) of a body's box around its disk's cells: link cells lie one cell outside
 /// the covered ones; one more for rounding.
@@ -110,25 +112,49 @@ impl Coupler {
     pub(super) fn collect_bodies(&mut self, views: &[GrainView]) {
         let f = self.frame;
         let cols = std::mem::take(&mut self.body_columns);
-        let mut seen = 0usize;
-        for j in 0..cols.groups.len() - 1 {
-            let members = cols.group(j);
-            let (g, image) = self.body(members[0] as usize);
-            let w = self.sums.window(g, views[g].centre[0], image[0]);
-            let x_lo = cols.columns(j)[0] as usize;
-            let first = cols.first[j] as usize;
-            for s in first..cols.first[j + 1] as usize {
-                let n = cols.counts[s];
-                if n == 0 {
+        // The slots by bands of columns in parallel: a band's task adds its columns' slots
+        // in group order, and a column's slot is no other column's, so every sum takes its
+        // loads in the serial order.
+        let (scheme, disks, body_grain, bodies) = (
+            self.scheme,
+            &self.disk_images,
+            &self.body_grain,
+            &self.links.bodies,
+        );
+        let body = |b: usize| match scheme {
+            Scheme::Psm => (disks[b].0 as usize, disks[b].1),
+            _ => (body_grain[b] as usize, bodies[b].centre),
+        };
+        let seen = AtomicUsize::new(0);
+        self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
+            let mut n_band = 0;
+            for j in 0..cols.groups.len() - 1 {
+                // The group's slots are its columns from its box's first, in order.
+                let (first, end) = (cols.first[j] as usize, cols.first[j + 1] as usize);
+                let column0 = f.x0 + cols.columns(j)[0] as usize;
+                let from = first + band.start.saturating_sub(column0);
+                let to = end.min(first + band.end.saturating_sub(column0));
+                if from >= to {
                     continue;
                 }
-                seen += n as usize;
-                self.sums.add_in(&w, f.x0 + x_lo + s - first, cols.sums[s]);
+                // The group's window of its grain's sums.
+                let (g, image) = body(cols.group(j)[0] as usize);
+                let w = sums.window(g, views[g].centre[0], image[0]);
+                for s in from..to {
+                    let n = cols.counts[s];
+                    if n != 0 {
+                        n_band += n as usize;
+                        sums.add_to(&w, column0 + s - first, cols.sums[s]);
+                    }
+                }
             }
-        }
-        let some = !cols.body_slot.is_empty();
+            seen.fetch_add(n_band, Ordering::Relaxed);
+        });
+        let mut seen = seen.into_inner();
+        // The bodies the backend did not sum, if any, one share at a time.
+        let unslotted = cols.body_slot.contains(&NO_SLOT);
         self.body_columns = cols;
-        if some {
+        if unslotted {
             seen += self.collect_psm_unslotted(views);
         }
         let planned = match self.scheme {

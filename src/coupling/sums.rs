@@ -197,6 +197,12 @@ impl Adder<'_> {
         self.put(at, load);
     }
 
+    /// [`ColumnSums::window`] of the sums this adds to.
+    #[inline]
+    pub fn window(&self, g: usize, grain_x: f64, image_x: f64) -> Window {
+        self.sums.window(g, grain_x, image_x)
+    }
+
     /// As [`Adder::add`], for the grain image whose slots are `w` (from
     /// [`ColumnSums::window`]): the same slot.
     #[inline]
