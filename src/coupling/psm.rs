@@ -309,12 +309,17 @@ fn plan_row(
         }
     };
     let first = first as usize;
+    // As many cells as shares (the map counted them): every cell has one share (the row
+    // of most grains apart), and no run of the row needs checking.
+    let one_share_row = cells.len() == row.len();
     let (mut c, mut j) = (0, 0);
     while j < row.len() {
         // The next eight shares and the one after them: each of the eight is its cell's
         // only share when no two neighbours share a cell (the first starts a cell).
         let ahead = &row[j..(j + LANES + 1).min(row.len())];
-        if ahead.len() >= LANES && ahead.windows(2).all(|w| w[0].cell != w[1].cell) {
+        if ahead.len() >= LANES
+            && (one_share_row || ahead.windows(2).all(|w| w[0].cell != w[1].cell))
+        {
             let next = &ahead[..LANES];
             let f: [f64; LANES] = std::array::from_fn(|i| next[i].fraction);
             // A one-share cell's ε, summed as the general case sums it.
