@@ -101,6 +101,13 @@ pub trait Comm: Send + Sync {
     fn any(&self, flag: bool) -> bool {
         self.max_f64(flag as u8 as f64) > 0.0
     }
+    /// Whether this communicator may be called from a thread other than the one that
+    /// created it (one call at a time): then the time loop can run on a worker of the
+    /// thread pool. True without MPI; with MPI, where the library granted
+    /// `MPI_THREAD_SERIALIZED` or more.
+    fn any_thread(&self) -> bool {
+        true
+    }
     /// True on the rank that prints logs and writes serial files.
     fn is_root(&self) -> bool {
         self.rank() == 0

@@ -32,25 +32,31 @@ pub struct MpiComm {
     world: SimpleCommunicator,
     rank: usize,
     size: usize,
+    /// The library granted MPI_THREAD_SERIALIZED or more.
+    serialized: bool,
     // Declared last: finalises MPI after `world` is dropped.
     _universe: mpi::environment::Universe,
 }
 
-// SAFETY: the communicator is only used from the thread that initialised MPI (funneled
-// mode); grainflow calls `Comm` methods from its main loop only. The handle itself is an
+// SAFETY: grainflow calls `Comm` methods from its time loop only, one call at a time: on
+// the thread that initialised MPI, or, where the library granted MPI_THREAD_SERIALIZED
+// (`any_thread`), on the one pool worker that runs the loop. The handle itself is an
 // immutable pointer that Open MPI allows to be shared.
 unsafe impl Send for MpiComm {}
 unsafe impl Sync for MpiComm {}
 
 impl MpiComm {
-    /// Initialise MPI (funneled threading). `None` if MPI was already initialised.
+    /// Initialise MPI, asking for serialized threading (calls from any one thread at a
+    /// time: the time loop runs on a pool worker, see [`Comm::any_thread`]). `None` if MPI
+    /// was already initialised.
     pub fn init() -> Option<Self> {
-        let (universe, _) = mpi::initialize_with_threading(mpi::Threading::Funneled)?;
+        let (universe, granted) = mpi::initialize_with_threading(mpi::Threading::Serialized)?;
         let world = universe.world();
         Some(Self {
             rank: world.rank() as usize,
             size: world.size() as usize,
             world,
+            serialized: granted >= mpi::Threading::Serialized,
             _universe: universe,
         })
     }
@@ -79,6 +85,9 @@ impl MpiComm {
 impl Comm for MpiComm {
     fn rank(&self) -> usize {
         self.rank
+    }
+    fn any_thread(&self) -> bool {
+        self.serialized
     }
     fn size(&self) -> usize {
         self.size
