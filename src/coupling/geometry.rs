@@ -265,6 +265,49 @@ impl CellAreas<'_> {
     }
 }
 
+/// One disk's line tables, built directly (the partially saturated map builds them for all
+/// images in one pass): for tests.
+#[cfg(test)]
+pub(crate) struct LineTables {
+    columns: Vec<ColumnLine>,
+    rows: Vec<RowLine>,
+    x_lo: i64,
+    y_lo: i64,
+    radius: f64,
+}
+
+#[cfg(test)]
+impl LineTables {
+    /// The tables of a disk at `c` with radius `r` over its box ([`box_lines`]), the column
+    /// table followed by `pad` copies of its last line (as [`TABLE_PAD`]).
+    pub(crate) fn new(c: [f64; 2], r: f64, pad: usize) -> Self {
+        let (x_lo, nx) = box_lines(c[0], r);
+        let (y_lo, ny) = box_lines(c[1], r);
+        Self {
+            columns: (0..nx + pad)
+                .map(|j| column_line(c, r, (x_lo + j.min(nx - 1) as i64) as f64))
+                .collect(),
+            rows: (0..ny)
+                .map(|m| row_line(c, r, (y_lo + m as i64) as f64))
+                .collect(),
+            x_lo,
+            y_lo,
+            radius: r,
+        }
+    }
+
+    /// The disk's [`CellAreas`] over these tables.
+    pub(crate) fn areas(&self) -> CellAreas<'_> {
+        CellAreas {
+            columns: &self.columns,
+            rows: &self.rows,
+            x_lo: self.x_lo,
+            y_lo: self.y_lo,
+            radius: self.radius,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -306,21 +349,10 @@ mod tests {
             cases.push(([200.0 * next() - 100.0, 200.0 * next() - 100.0], r));
         }
         for (c, r) in cases {
+            let tables = LineTables::new(c, r, 0);
+            let areas = tables.areas();
             let (x_lo, nx) = box_lines(c[0], r);
             let (y_lo, ny) = box_lines(c[1], r);
-            let columns: Vec<_> = (0..nx)
-                .map(|j| column_line(c, r, (x_lo + j as i64) as f64))
-                .collect();
-            let rows: Vec<_> = (0..ny)
-                .map(|m| row_line(c, r, (y_lo + m as i64) as f64))
-                .collect();
-            let areas = CellAreas {
-                columns: &columns,
-                rows: &rows,
-                x_lo,
-                y_lo,
-                radius: r,
-            };
             let tol = 1e-14 * (1.0 + r * r);
             let mut total = 0.0;
             for y in y_lo..y_lo + ny as i64 - 1 {

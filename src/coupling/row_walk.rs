@@ -20,6 +20,31 @@ fn far(lo: f64, v: f64) -> f64 {
     greater((v - lo).abs(), (v - lo - 1.0).abs())
 }
 
+/// What every walk of row `y` of a disk at `c` with radius `r` starts from: the local x of
+/// the slab's first column (`x0`), the row's box clipped to the slab's interior columns
+/// (`xa..=xb`), and the nearest and farthest distances along y from the centre to the row.
+struct RowStart {
+    x0: i64,
+    xa: i64,
+    xb: i64,
+    near_y: f64,
+    far_y: f64,
+}
+
+impl RowStart {
+    #[inline(always)]
+    fn new(frame: &SlabFrame, c: [f64; 2], r: f64, y: i64) -> Self {
+        let x0 = frame.x0 as i64;
+        Self {
+            x0,
+            xa: ((c[0] - r).floor() as i64 - x0).max(0),
+            xb: ((c[0] + r).floor() as i64 - x0).min(frame.nx as i64 - 1),
+            near_y: near(y as f64, c[1]),
+            far_y: far(y as f64, c[1]),
+        }
+    }
+}
+
 /// Append to `out` the shares in row `y` of grain image `image` (a disk of `radius` cells
 /// centred at `c`, global frame): every interior plain-fluid cell (`types`: the lattice's
 /// padded cell types) of that row it overlaps, in increasing x, with its exact solid
@@ -93,10 +118,13 @@ unsafe fn walk_avx512(
 ) {
     use std::arch::x86_64::*;
     let r = radius;
-    let x0 = frame.x0 as i64;
-    let xa = ((c[0] - r).floor() as i64 - x0).max(0);
-    let xb = ((c[0] + r).floor() as i64 - x0).min(frame.nx as i64 - 1);
-    let (ny_, fy_) = (near(y as f64, c[1]), far(y as f64, c[1]));
+    let RowStart {
+        x0,
+        xa,
+        xb,
+        near_y: ny_,
+        far_y: fy_,
+    } = RowStart::new(frame, c, r, y);
     let (cx, rr) = (_mm512_set1_pd(c[0]), _mm512_set1_pd(r * r));
     let (ny2, fy2) = (_mm512_set1_pd(ny_ * ny_), _mm512_set1_pd(fy_ * fy_));
     let (zero, one) = (_mm512_setzero_pd(), _mm512_set1_pd(1.0));
@@ -220,7 +248,7 @@ unsafe fn walk_avx512(
     }
 }
 
-/// [`shares_in_row`]'s body.
+/// [`shares_in_row`] without AVX-512: the lanes as plain arrays, the same arithmetic.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn walk(
@@ -234,10 +262,13 @@ fn walk(
     out: &mut Vec<Share>,
 ) {
     let r = radius;
-    let x0 = frame.x0 as i64;
-    let xa = ((c[0] - r).floor() as i64 - x0).max(0);
-    let xb = ((c[0] + r).floor() as i64 - x0).min(frame.nx as i64 - 1);
-    let (ny_, fy_) = (near(y as f64, c[1]), far(y as f64, c[1]));
+    let RowStart {
+        x0,
+        xa,
+        xb,
+        near_y: ny_,
+        far_y: fy_,
+    } = RowStart::new(frame, c, r, y);
     let mut x = xa;
     while x <= xb {
         // The strips left of each cell's two vertical lines; their difference is its area.
@@ -277,7 +308,7 @@ fn walk(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::coupling::geometry::{box_lines, column_line, row_line, TABLE_PAD};
+    use crate::coupling::geometry::{LineTables, TABLE_PAD};
     use crate::coupling::test_slabs::{next, slab};
 
     /// The cell-by-cell walk the lanes replace: each cell of the row's box tested on its
@@ -348,21 +379,8 @@ mod tests {
                 disks.push(([cx, cy], r));
             }
             for (c, r) in disks {
-                let (x_lo, nx) = box_lines(c[0], r);
-                let (y_lo, ny) = box_lines(c[1], r);
-                let columns: Vec<_> = (0..nx + TABLE_PAD)
-                    .map(|j| column_line(c, r, (x_lo + j.min(nx - 1) as i64) as f64))
-                    .collect();
-                let rows: Vec<_> = (0..ny)
-                    .map(|m| row_line(c, r, (y_lo + m as i64) as f64))
-                    .collect();
-                let exact = CellAreas {
-                    columns: &columns,
-                    rows: &rows,
-                    x_lo,
-                    y_lo,
-                    radius: r,
-                };
+                let tables = LineTables::new(c, r, TABLE_PAD);
+                let exact = tables.areas();
                 let (ya, yb) = crate::coupling::map::share_rows(&f, c, r);
                 for y in ya..=yb {
                     let (mut want, mut lanes, mut plain) = (Vec::new(), Vec::new(), Vec::new());
