@@ -179,7 +179,7 @@ fn real_main() -> Result<i32> {
                             scene.display()
                         );
                     }
-                    return run_grain_scene(&g, out, !quiet, restart, comm);
+                    return in_pool(comm, || run_grain_scene(&g, out, !quiet, restart, comm));
                 }
                 scene::AnyScene::Mpm(m) => {
                     if precision.is_some() || backend.is_some() || steps.is_some() {
@@ -190,7 +190,7 @@ fn real_main() -> Result<i32> {
                             scene.display()
                         );
                     }
-                    return run_mpm_scene(&m, out, !quiet, restart, comm);
+                    return in_pool(comm, || run_mpm_scene(&m, out, !quiet, restart, comm));
                 }
             };
             for w in &s.warnings {
@@ -232,16 +232,7 @@ fn real_main() -> Result<i32> {
                     rayon::current_num_threads()
                 );
             }
-            // The time loop on a worker of the pool, where the communicator allows it:
-            // its parallel passes (a dozen and more per coupled step) then start from a
-            // worker, and the calling thread neither sleeps until each ends nor has to be
-            // woken after it (on the 2-core VM, context switches per 100 coupled steps
-            // 5000 → 1500, the step 2 % shorter).
-            let summary = if comm.any_thread() {
-                rayon::scope(|_| run_on(&s, &opts, comm))?
-            } else {
-                run_on(&s, &opts, comm)?
-            };
+            let summary = in_pool(comm, || run_on(&s, &opts, comm))?;
             if !root {
                 return Ok(exit_code(summary.status));
             }
@@ -275,6 +266,19 @@ fn real_main() -> Result<i32> {
             }
             Ok(exit_code(summary.status))
         }
+    }
+}
+
+/// Run a time loop `run` on a worker of the thread pool, where the communicator allows it
+/// (`Comm::any_thread`), else on this thread. Its parallel passes (a dozen and more per
+/// coupled step) then start from a worker, and the calling thread neither sleeps until each
+/// ends nor has to be woken after it: on the 2-core VM, context switches per 100 coupled
+/// steps 5000 → 1500, the step 2 % shorter.
+fn in_pool<R: Send>(comm: &dyn Comm, run: impl FnOnce() -> R + Send) -> R {
+    if comm.any_thread() {
+        rayon::scope(|_| run())
+    } else {
+        run()
     }
 }
 
