@@ -115,18 +115,9 @@ impl Coupler {
         // The slots by bands of columns in parallel: a band's task adds its columns' slots
         // in group order, and a column's slot is no other column's, so every sum takes its
         // loads in the serial order.
-        let (scheme, disks, body_grain, bodies) = (
-            self.scheme,
-            &self.disk_images,
-            &self.body_grain,
-            &self.links.bodies,
-        );
-        let body = |b: usize| match scheme {
-            Scheme::Psm => (disks[b].0 as usize, disks[b].1),
-            _ => (body_grain[b] as usize, bodies[b].centre),
-        };
+        let mut column_sums = std::mem::take(&mut self.sums);
         let seen = AtomicUsize::new(0);
-        self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
+        column_sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
             let mut n_band = 0;
             for j in 0..cols.groups.len() - 1 {
                 // The group's slots are its columns from its box's first, in order.
@@ -138,7 +129,7 @@ impl Coupler {
                     continue;
                 }
                 // The group's window of its grain's sums.
-                let (g, image) = body(cols.group(j)[0] as usize);
+                let (g, image) = self.body(cols.group(j)[0] as usize);
                 let w = sums.window(g, views[g].centre[0], image[0]);
                 for s in from..to {
                     let n = cols.counts[s];
@@ -150,6 +141,7 @@ impl Coupler {
             }
             seen.fetch_add(n_band, Ordering::Relaxed);
         });
+        self.sums = column_sums;
         let mut seen = seen.into_inner();
         // The bodies the backend did not sum, if any, one share at a time.
         let unslotted = cols.body_slot.contains(&NO_SLOT);

@@ -224,26 +224,19 @@ pub struct CellAreas<'a> {
 impl CellAreas<'_> {
     /// Area the disk shares with cell (x, y) (inside the box) as a fraction of the cell, in
     /// [0, 1]: [`cell_fraction`] to rounding (the error grows with πr²; tested to within
-    /// 1e-14 (1 + r²)).
-    #[inline]
+    /// 1e-14 (1 + r²)). The cell-by-cell form; the map takes runs of cells in lanes
+    /// ([`CellAreas::strips`]), tested against this.
+    #[cfg(test)]
     pub fn fraction(&self, x: i64, y: i64) -> f64 {
-        Self::between(self.strip(x, y), self.strip(x + 1, y))
+        let [left, right] = self.strips::<2>(x, y);
+        Self::between(left, right)
     }
 
-    /// The disk's area in row `y` (between the horizontal lines y and y + 1) left of the
-    /// vertical line `x` (both lines inside the box). A cell's area is the difference of the
-    /// strips at its two vertical lines, so a run of cells in a row takes one strip per line.
-    #[inline]
-    pub fn strip(&self, x: i64, y: i64) -> f64 {
-        let (j, m) = ((x - self.x_lo) as usize, (y - self.y_lo) as usize);
-        let half = std::f64::consts::FRAC_PI_2 * self.radius * self.radius;
-        let (col, r0, r1) = (self.columns[j], self.rows[m], self.rows[m + 1]);
-        corner_area(col, r1, half) - corner_area(col, r0, half)
-    }
-
-    /// [`CellAreas::strip`] at the `N` vertical lines from `x` on, in lanes (the same
-    /// arithmetic per lane). The column table must hold them: line `x + N − 1` may lie
-    /// past the box, where the partially saturated map pads each image's table
+    /// The disk's area in row `y` (between the horizontal lines y and y + 1) left of each of
+    /// the `N` vertical lines from `x` on, in lanes (the same arithmetic per lane). A cell's
+    /// area is the difference of the strips at its two vertical lines, so a run of cells in
+    /// a row takes one strip per line. The column table must hold the lines: line `x + N − 1`
+    /// may lie past the box, where the partially saturated map pads each image's table
     /// ([`TABLE_PAD`] entries).
     #[inline(always)]
     pub fn strips<const N: usize>(&self, x: i64, y: i64) -> [f64; N] {
@@ -258,7 +251,7 @@ impl CellAreas<'_> {
         out
     }
 
-    /// A cell's fraction from the strips at its left and right lines ([`CellAreas::strip`]).
+    /// A cell's fraction from the strips at its left and right lines ([`CellAreas::strips`]).
     #[inline]
     pub fn between(left: f64, right: f64) -> f64 {
         (right - left).clamp(0.0, 1.0)

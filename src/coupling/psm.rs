@@ -8,7 +8,7 @@ use super::geometry::{
     box_lines, column_line, row_line, CellAreas, ColumnLine, RowLine, TABLE_PAD,
 };
 use super::map::{share_rows, GrainView, Share};
-use super::row_walk::{prefetch_types, shares_in_row};
+use super::row_walk::shares_in_row;
 use crate::lbm::moving::{SolidShare, NO_SLOT};
 use crate::lbm::{Lattice, Real};
 use rayon::prelude::*;
@@ -136,9 +136,6 @@ impl Coupler {
             .for_each(|(y, row)| {
                 let out = &mut row.shares;
                 out.clear();
-                for i in in_row(y) {
-                    prefetch_types(&f, types, disks[i].1, radius(i), y as i64);
-                }
                 for i in in_row(y) {
                     let (g, c) = (disks[i].0 as usize, disks[i].1);
                     let (r, exact) = (views[g].radius, areas(i));

@@ -78,26 +78,6 @@ pub fn shares_in_row(
     walk(frame, types, radius, image, c, y, exact, out)
 }
 
-/// Ask for the cache line of `types` holding the first cell in row `y` of the box of a disk
-/// at `c` with radius `r` (a hint). The row walk's first read of each grain's row misses
-/// (the sweep has streamed the lattice through the caches since): asking for a row's
-/// grains all at once overlaps those misses.
-#[inline]
-pub fn prefetch_types(frame: &SlabFrame, types: &[u16], c: [f64; 2], r: f64, y: i64) {
-    let x = ((c[0] - r).floor() as i64 - frame.x0 as i64).clamp(0, frame.nx as i64 - 1);
-    #[cfg(target_arch = "x86_64")]
-    if let Some(t) = types.get(frame.padded(x, y)) {
-        // SAFETY: a prefetch is a hint; it does not access memory architecturally.
-        unsafe {
-            std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
-                (t as *const u16).cast(),
-            )
-        };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (frame, types, x, y);
-}
-
 /// [`walk`] in AVX-512 registers: the same operations lane by lane, in the same order, so
 /// the same bits (`lesser`/`greater` are `vminpd`/`vmaxpd`, `clamp` two compares and
 /// blends). Left to itself, LLVM splits [`walk`]'s lanes over registers of three widths and
