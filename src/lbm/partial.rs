@@ -106,23 +106,39 @@ pub(crate) fn add_share<V: Simd>(
     let (wr0, wr1, wr2) = (s(W[0]) * m.rho, s(W[1]) * m.rho, s(W[5]) * m.rho);
     // Rest direction: h_0 + Ω^s_0 = h_0 + E_0.
     new[0] = new[0] + b * (h[0] - wr0 * du2);
-    // One pair (i, ī = OPP[i]) with c_i·u = `cf`, c_i·u_s = `cs` and weight w_i ρ = `wr`:
-    // its E_i and O_i into `new`; returns h_ī − h_i + O_i.
-    let mut pair = |i: usize, wr: V, cf: V, cs: V| {
-        let j = OPP[i];
-        let e = wr * (s(4.5) * ((cs - cf) * (cs + cf)) - du2);
-        let o = s(3.0) * wr * (cf + cs);
-        new[i] = new[i] + b * ((h[j] + e) + o);
-        new[j] = new[j] + b * ((h[i] + e) - o);
-        (h[j] - h[i]) + o
-    };
     // c = (1, 0), (0, 1), (1, 1), (−1, 1): directions 1, 2, 5, 6.
-    let d1 = pair(1, wr1, uf[0], us[0]);
-    let d2 = pair(2, wr1, uf[1], us[1]);
-    let d5 = pair(5, wr2, uf[0] + uf[1], us[0] + us[1]);
-    let d6 = pair(6, wr2, uf[1] - uf[0], us[1] - us[0]);
+    let d1 = add_pair(new, h, b, du2, 1, wr1, uf[0], us[0]);
+    let d2 = add_pair(new, h, b, du2, 2, wr1, uf[1], us[1]);
+    let d5 = add_pair(new, h, b, du2, 5, wr2, uf[0] + uf[1], us[0] + us[1]);
+    let d6 = add_pair(new, h, b, du2, 6, wr2, uf[1] - uf[0], us[1] - us[0]);
     let two_b = s(2.0) * b;
     [two_b * ((d1 + d5) - d6), two_b * ((d2 + d5) + d6)]
+}
+
+/// One pair of [`add_share`] (i, ī = OPP[i]) with c_i·u = `cf`, c_i·u_s = `cs`, weight
+/// w_i ρ = `wr` and 1.5 (u_s² − u²) = `du2`: its E_i and O_i into `new`; returns
+/// h_ī − h_i + O_i. A function rather than a closure so that it is always inlined: as a
+/// closure LLVM kept it out of line in the lane kernel, with `new` in memory.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn add_pair<V: Simd>(
+    new: &mut [V; Q],
+    h: &[V; Q],
+    b: V,
+    du2: V,
+    i: usize,
+    wr: V,
+    cf: V,
+    cs: V,
+) -> V {
+    let s = |v: f64| V::splat(V::Scalar::from_f64(v));
+    let j = OPP[i];
+    // Qian et al. 1992, eq. 7: the even part E_i and the odd part O_i.
+    let e = wr * (s(4.5) * ((cs - cf) * (cs + cf)) - du2);
+    let o = s(3.0) * wr * (cf + cs);
+    new[i] = new[i] + b * ((h[j] + e) + o);
+    new[j] = new[j] + b * ((h[i] + e) - o);
+    (h[j] - h[i]) + o
 }
 
 /// Whether the density of the shifted populations `new`, 1 + Σ_i new_i (summed in direction
