@@ -50,6 +50,17 @@ pub enum KernelArg {
     InPlace,
 }
 
+/// What idle pool workers do during a time loop, on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum WaitPolicyArg {
+    /// `active` where threads × ranks on the node fit its cores, else `passive`.
+    Auto,
+    /// Keep looking for work (busy cores, short passes start at once).
+    Active,
+    /// Sleep until woken (rayon's own).
+    Passive,
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -86,6 +97,12 @@ pub enum Command {
         /// halves the memory; `auto` takes it where it measured faster.
         #[arg(long, value_enum)]
         kernel: Option<KernelArg>,
+        /// What idle worker threads do while the time loop runs: `active` keeps them
+        /// looking for work (as OMP_WAIT_POLICY=active; the coupled step about 2 % shorter on 2
+        /// cores), `passive` lets them sleep; `auto` is active unless the threads of the
+        /// ranks on this node outnumber its cores.
+        #[arg(long, value_enum, default_value = "auto")]
+        wait_policy: WaitPolicyArg,
     },
     /// Measure the stability limits `check` uses: the fluid's map over τ, lattice Mach
     /// number and operator (a shear layer and a cavity), the DEM's time-step factor λ and the

@@ -15,6 +15,7 @@ pub mod gpu;
 pub mod io;
 pub mod lbm;
 pub mod mpm;
+pub mod pool;
 pub mod progress;
 pub mod run;
 pub mod run_grains;

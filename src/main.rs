@@ -4,8 +4,9 @@ mod cli;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use cli::{BackendArg, Cli, Command, GpuStorageArg, KernelArg, PrecisionArg};
+use cli::{BackendArg, Cli, Command, GpuStorageArg, KernelArg, PrecisionArg, WaitPolicyArg};
 use decomposition::{launched_by_mpi, Comm, MpiComm, SingleProcess};
+use grainflow::pool::{in_pool, WaitPolicy};
 use grainflow::run::{
     run_on, step_count, Backend, GpuStorage, Kernel, Precision, RunOptions, Status,
 };
@@ -158,6 +159,7 @@ fn real_main() -> Result<i32> {
             backend,
             gpu_storage,
             kernel,
+            wait_policy,
         } => {
             let comm = communicator()?;
             let comm = comm.as_ref();
@@ -167,6 +169,12 @@ fn real_main() -> Result<i32> {
                     .build_global()
                     .context("setting up the thread pool")?;
             }
+            let spin = match wait_policy {
+                WaitPolicyArg::Auto => WaitPolicy::Auto,
+                WaitPolicyArg::Active => WaitPolicy::Active,
+                WaitPolicyArg::Passive => WaitPolicy::Passive,
+            }
+            .spins_here(comm);
             let out = out.unwrap_or_else(|| default_out(&scene));
             let s = match scene::load_any(&scene)? {
                 scene::AnyScene::Fluid(s) => *s,
@@ -179,7 +187,9 @@ fn real_main() -> Result<i32> {
                             scene.display()
                         );
                     }
-                    return in_pool(comm, || run_grain_scene(&g, out, !quiet, restart, comm));
+                    return in_pool(comm, spin, || {
+                        run_grain_scene(&g, out, !quiet, restart, comm)
+                    });
                 }
                 scene::AnyScene::Mpm(m) => {
                     if precision.is_some() || backend.is_some() || steps.is_some() {
@@ -190,7 +200,7 @@ fn real_main() -> Result<i32> {
                             scene.display()
                         );
                     }
-                    return in_pool(comm, || run_mpm_scene(&m, out, !quiet, restart, comm));
+                    return in_pool(comm, spin, || run_mpm_scene(&m, out, !quiet, restart, comm));
                 }
             };
             for w in &s.warnings {
@@ -222,17 +232,18 @@ fn real_main() -> Result<i32> {
             let root = comm.is_root();
             if root {
                 eprintln!(
-                    "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} rank(s) × {} threads",
+                    "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} rank(s) × {} threads{}",
                     scene.display(),
                     step_count(&s, steps),
                     s.units.tau,
                     s.units.mach,
                     s.units.reynolds,
                     comm.size(),
-                    rayon::current_num_threads()
+                    rayon::current_num_threads(),
+                    if spin { " (idle workers active)" } else { "" }
                 );
             }
-            let summary = in_pool(comm, || run_on(&s, &opts, comm))?;
+            let summary = in_pool(comm, spin, || run_on(&s, &opts, comm))?;
             if !root {
                 return Ok(exit_code(summary.status));
             }
@@ -266,19 +277,6 @@ fn real_main() -> Result<i32> {
             }
             Ok(exit_code(summary.status))
         }
-    }
-}
-
-/// Run a time loop `run` on a worker of the thread pool, where the communicator allows it
-/// (`Comm::any_thread`), else on this thread. Its parallel passes (a dozen and more per
-/// coupled step) then start from a worker, and the calling thread neither sleeps until each
-/// ends nor has to be woken after it: on the 2-core VM, context switches per 100 coupled
-/// steps 5000 → 1500, the step 2 % shorter.
-fn in_pool<R: Send>(comm: &dyn Comm, run: impl FnOnce() -> R + Send) -> R {
-    if comm.any_thread() {
-        rayon::scope(|_| run())
-    } else {
-        run()
     }
 }
 

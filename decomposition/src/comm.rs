@@ -108,6 +108,11 @@ pub trait Comm: Send + Sync {
     fn any_thread(&self) -> bool {
         true
     }
+    /// How many ranks of this communicator share this rank's node (its memory and cores),
+    /// this one included: 1 without MPI.
+    fn ranks_on_node(&self) -> usize {
+        1
+    }
     /// True on the rank that prints logs and writes serial files.
     fn is_root(&self) -> bool {
         self.rank() == 0

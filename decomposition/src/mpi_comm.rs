@@ -34,6 +34,8 @@ pub struct MpiComm {
     size: usize,
     /// The library granted MPI_THREAD_SERIALIZED or more.
     serialized: bool,
+    /// Ranks of `world` on this rank's node (`MPI_Comm_split_type`, shared memory).
+    ranks_on_node: usize,
     // Declared last: finalises MPI after `world` is dropped.
     _universe: mpi::environment::Universe,
 }
@@ -52,11 +54,13 @@ impl MpiComm {
     pub fn init() -> Option<Self> {
         let (universe, granted) = mpi::initialize_with_threading(mpi::Threading::Serialized)?;
         let world = universe.world();
+        let ranks_on_node = world.split_shared(world.rank()).size() as usize;
         Some(Self {
             rank: world.rank() as usize,
             size: world.size() as usize,
             world,
             serialized: granted >= mpi::Threading::Serialized,
+            ranks_on_node,
             _universe: universe,
         })
     }
@@ -88,6 +92,9 @@ impl Comm for MpiComm {
     }
     fn any_thread(&self) -> bool {
         self.serialized
+    }
+    fn ranks_on_node(&self) -> usize {
+        self.ranks_on_node
     }
     fn size(&self) -> usize {
         self.size
