@@ -13,6 +13,15 @@
 use decomposition::Comm;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+/// Set while a time loop runs with its idle workers looking for work.
+static ACTIVE: AtomicBool = AtomicBool::new(false);
+
+/// Whether the idle workers look for work now (inside [`in_pool`] with `spin`): what a
+/// run's `summary.json` reports as `idle_workers_active`.
+pub fn idle_workers_active() -> bool {
+    ACTIVE.load(Ordering::Relaxed)
+}
+
 /// What the pool's idle workers do while a time loop runs (`grainflow run --wait-policy`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum WaitPolicy {
@@ -59,6 +68,7 @@ pub fn in_pool<R: Send>(comm: &dyn Comm, spin: bool, run: impl FnOnce() -> R + S
     let done = AtomicBool::new(false);
     rayon::scope(|s| {
         if spin {
+            ACTIVE.store(true, Ordering::Relaxed);
             let (home, done) = (rayon::current_thread_index(), &done);
             // One job per worker: each but the loop's own looks for work until the end.
             s.spawn_broadcast(move |_, ctx| {
@@ -92,6 +102,7 @@ struct SetOnDrop<'a>(&'a AtomicBool);
 impl Drop for SetOnDrop<'_> {
     fn drop(&mut self) {
         self.0.store(true, Ordering::Release);
+        ACTIVE.store(false, Ordering::Relaxed);
     }
 }
 
@@ -145,6 +156,11 @@ mod tests {
             })
         };
         assert_eq!(sums(true), sums(false));
+        let seen = pool.install(|| in_pool(&comm, true, idle_workers_active));
+        assert!(
+            seen && !idle_workers_active(),
+            "active inside the loop only"
+        );
         let unwound = pool.install(|| {
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 in_pool(&comm, true, || -> u64 { panic!("a step failed") })

@@ -174,6 +174,8 @@ pub struct Summary {
     pub ranks: usize,
     /// Rayon threads per rank.
     pub threads: usize,
+    /// Whether the idle threads looked for work through the time loop (`--wait-policy`).
+    pub idle_workers_active: bool,
     /// Columns `[x_begin, x_end)` of each rank.
     pub partition: Vec<[usize; 2]>,
     /// Step the run started from (0, or the checkpoint's step on a restart).
@@ -628,6 +630,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         device: sim.fluid.device(),
         ranks: comm.size(),
         threads: rayon::current_num_threads(),
+        idle_workers_active: crate::pool::idle_workers_active(),
         partition: (0..comm.size())
             .map(|r| {
                 let s = sim.partition.slab(r);

@@ -48,6 +48,8 @@ pub struct GrainSummary {
     pub ranks: usize,
     /// Rayon threads per rank.
     pub threads: usize,
+    /// Whether the idle threads looked for work through the time loop (`--wait-policy`).
+    pub idle_workers_active: bool,
     /// x-boundaries of the ranks' slabs at the end (m).
     pub slab_bounds_m: Vec<f64>,
     /// Grains in the run.
@@ -348,6 +350,7 @@ pub fn run_grains(
         warnings: scene.warnings.clone(),
         ranks,
         threads: rayon::current_num_threads(),
+        idle_workers_active: crate::pool::idle_workers_active(),
         slab_bounds_m: d.bounds().to_vec(),
         grains: n_total,
         time_step_s: dt,

@@ -42,6 +42,8 @@ pub struct MpmSummary {
     pub ranks: usize,
     /// Rayon threads per rank.
     pub threads: usize,
+    /// Whether the idle threads looked for work through the time loop (`--wait-policy`).
+    pub idle_workers_active: bool,
     /// Cell-column boundaries of the ranks' slabs at the end.
     pub slab_columns: Vec<usize>,
     /// Material points.
@@ -388,6 +390,7 @@ pub fn run_mpm(
         warnings: scene.warnings.clone(),
         ranks: comm.size(),
         threads: rayon::current_num_threads(),
+        idle_workers_active: crate::pool::idle_workers_active(),
         slab_columns: sys.slab_columns().to_vec(),
         points: start_totals.points,
         cells: [spec.nx, spec.ny],
