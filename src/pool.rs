@@ -49,10 +49,11 @@ impl WaitPolicy {
     }
 
     /// [`WaitPolicy::spins`] for the global pool, the ranks of `comm` on this node and the
-    /// cores the OS gives this process.
+    /// cores the OS gives this process; false where the loop cannot run on a worker
+    /// ([`Comm::any_thread`]), which [`in_pool`] needs for spinning.
     pub fn spins_here(self, comm: &dyn Comm) -> bool {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        self.spins(rayon::current_num_threads(), comm.ranks_on_node(), cores)
+        comm.any_thread() && self.spins(rayon::current_num_threads(), comm.ranks_on_node(), cores)
     }
 }
 
