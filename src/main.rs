@@ -280,6 +280,16 @@ fn real_main() -> Result<i32> {
     }
 }
 
+/// What a grain or MPM run's first log line adds when its idle workers look for work (it
+/// prints from inside [`in_pool`]).
+fn active_note() -> &'static str {
+    if grainflow::pool::idle_workers_active() {
+        " (idle workers active)"
+    } else {
+        ""
+    }
+}
+
 /// The default output folder of a scene: `runs/<stem>` (`runs/<folder>` for `scene.toml`).
 fn default_out(scene: &std::path::Path) -> std::path::PathBuf {
     let stem = scene
@@ -315,10 +325,11 @@ fn run_grain_scene(
     let opts = RunOptions::particles(out.clone(), progress, restart);
     if comm.is_root() {
         eprintln!(
-            "running grains scene {} on {} rank(s) × {} threads",
+            "running grains scene {} on {} rank(s) × {} threads{}",
             g.path.display(),
             comm.size(),
-            rayon::current_num_threads()
+            rayon::current_num_threads(),
+            active_note()
         );
     }
     let summary = grainflow::run_grains::run_grains(g, &opts, comm)?;
@@ -534,10 +545,11 @@ fn run_mpm_scene(
             eprintln!("warning: {w}");
         }
         eprintln!(
-            "running MPM scene {} on {} rank(s) × {} threads",
+            "running MPM scene {} on {} rank(s) × {} threads{}",
             m.path.display(),
             comm.size(),
-            rayon::current_num_threads()
+            rayon::current_num_threads(),
+            active_note()
         );
     }
     let opts = RunOptions::particles(out.clone(), progress, restart);

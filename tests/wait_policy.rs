@@ -2,7 +2,7 @@
 //! loop (`active`) or sleep until woken (`passive`), a coupled run gives the same bits
 //! (every parallel pass is deterministic on any schedule).
 mod common;
-use common::{assert_bit_identical, assert_grains_identical, root};
+use common::{assert_bit_identical, assert_grains_identical, root, summary};
 
 #[test]
 fn active_and_passive_waiting_give_the_same_bits() {
@@ -25,6 +25,9 @@ fn active_and_passive_waiting_give_the_same_bits() {
         out
     };
     let (active, passive) = (run("active"), run("passive"));
+    // Each run did what it was asked (the comparison below would pass with neither spinning).
+    assert_eq!(summary(&active)["idle_workers_active"], true);
+    assert_eq!(summary(&passive)["idle_workers_active"], false);
     assert_bit_identical(&active, &passive);
     assert_grains_identical(&active, &passive);
 }
