@@ -9,7 +9,7 @@
 mod common;
 use common::periodic_box;
 use decomposition::SingleProcess;
-use grainflow::gpu::{GpuContext, GpuFluid};
+use grainflow::lbm::gpu::{GpuContext, GpuFluid};
 use grainflow::lbm::{Collision, FluidBackend, Real};
 use grainflow::scene::GpuStorage;
 use std::sync::Arc;

@@ -54,7 +54,7 @@ fn real_main() -> Result<i32> {
                 "ranks: {} (MPI slab decomposition along x; start with mpirun -np N)",
                 comm.size()
             );
-            let adapters = grainflow::gpu::list_adapters();
+            let adapters = grainflow::lbm::gpu::list_adapters();
             if adapters.is_empty() {
                 println!(
                     "GPU adapters: none found (install a Vulkan driver; `--backend gpu` needs one)"
@@ -503,7 +503,7 @@ fn print_check(s: &scene::ValidScene) {
         buffers,
         if one { ", in place" } else { "s" }
     );
-    match grainflow::coupling::plan(s) {
+    match grainflow::coupled::plan(s) {
         Ok(Some(p)) => {
             println!(
                 "  coupling         {} with {} DEM sub-steps per fluid step (Δt_D = {:.4e} s){}",

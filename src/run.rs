@@ -1,29 +1,29 @@
 //! Running a scene end to end: the time loop, output, analyses, checks and `summary.json`.
 
-use crate::analysis::checks::{evaluate, CheckOutcome};
-use crate::analysis::{self, Results};
-use crate::io::atomic::{ensure_writable_dir, write_atomic};
-use crate::io::checkpoint;
-use crate::io::hdf5_out::Layout;
-use crate::io::OutputError;
-use crate::lbm::fields::Totals;
-use crate::lbm::Real;
 use crate::progress::Progress;
-use crate::scene::{SceneError, Units, ValidScene};
 use crate::simulation::{stage, Simulation, STAGES};
+use analysis::checks::{evaluate, CheckOutcome};
+use analysis::{self, Results};
 use decomposition::{Comm, SingleProcess};
+use io::atomic::{ensure_writable_dir, write_atomic};
+use io::checkpoint;
+use io::hdf5_out::Layout;
+use io::OutputError;
+use lbm::fields::Totals;
+use lbm::Real;
+use scene::{SceneError, Units, ValidScene};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
-use thiserror::Error;
 
 mod output;
 use output::Output;
 
-pub use crate::scene::{Backend, GpuStorage, Kernel, Precision};
+pub use crate::error::RunError;
+pub use scene::{Backend, GpuStorage, Kernel, Precision};
 
 /// Options from the command line that override or complement the scene.
 #[derive(Debug, Clone)]
@@ -60,29 +60,6 @@ impl RunOptions {
             restart,
         }
     }
-}
-
-/// Why a run could not start or finish writing.
-#[derive(Debug, Error)]
-pub enum RunError {
-    /// The scene is invalid.
-    #[error(transparent)]
-    Scene(#[from] SceneError),
-    /// Output could not be written.
-    #[error(transparent)]
-    Output(#[from] OutputError),
-    /// An analysis failed.
-    #[error(transparent)]
-    Analysis(#[from] analysis::AnalysisError),
-    /// The GPU backend could not start.
-    #[error(transparent)]
-    Gpu(#[from] crate::gpu::GpuError),
-    /// The grains could not be set up.
-    #[error(transparent)]
-    Dem(#[from] crate::dem::DemError),
-    /// The material points could not be set up.
-    #[error(transparent)]
-    Mpm(#[from] crate::mpm::MpmError),
 }
 
 /// Per-stage statistics over the ranks from each rank's `local` seconds (in the order of
@@ -155,7 +132,7 @@ pub struct Summary {
     /// Scene title.
     pub title: String,
     /// The scene as parsed (defaults filled in).
-    pub scene: crate::scene::Scene,
+    pub scene: scene::Scene,
     /// Outcome.
     pub status: Status,
     /// Instability report, if any.
@@ -317,8 +294,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let (restored_grains, momentum_restored, initial_restored) =
         match (&opts.restart, &scene.scene.grains) {
             (Some(path), Some(_)) => {
-                let walls = crate::coupling::driver::wall_count(scene)?;
-                let r = crate::io::coupled_checkpoint::read(path, comm, walls)?;
+                let walls = crate::coupled::wall_count(scene)?;
+                let r = io::coupled_checkpoint::read(path, comm, walls)?;
                 (Some(r.grains), r.momentum_initial, Some(r.initial))
             }
             _ => (None, None, None),
@@ -330,7 +307,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         .scene
         .analyses
         .iter()
-        .any(|a| matches!(a, crate::scene::Analysis::MomentumBalance));
+        .any(|a| matches!(a, scene::Analysis::MomentumBalance));
     let momentum = |sim: &mut Simulation<T>| {
         let Simulation { grains, fluid, .. } = sim;
         grains.as_ref().filter(|_| wants_momentum).map(|c| {
@@ -430,13 +407,13 @@ fn run_typed<T: Real + hdf5::H5Type>(
         let r = match &sim.grains {
             None => checkpoint::write(&checkpoint_path, comm, &lat, &state),
             Some(c) => {
-                let grains = crate::io::coupled_checkpoint::CoupledState {
+                let grains = io::coupled_checkpoint::CoupledState {
                     dem: &c.dem,
                     per_grain: c.per_grain_state(),
                     momentum_initial,
                     initial: &grains_initial,
                 };
-                crate::io::coupled_checkpoint::write(&checkpoint_path, comm, &lat, &state, &grains)
+                io::coupled_checkpoint::write(&checkpoint_path, comm, &lat, &state, &grains)
             }
         };
         sim.times.seconds[stage::CHECKPOINT] += t.elapsed().as_secs_f64();
@@ -598,14 +575,14 @@ fn run_typed<T: Real + hdf5::H5Type>(
         .collect();
     // Every rank of a coupled run holds grains (maybe none in view), so this is collective.
     let coupling_pass_seconds = match &sim.grains {
-        Some(g) => stage_stats(&crate::coupling::PASSES, &g.pass_seconds(), comm).1,
+        Some(g) => stage_stats(&coupling::PASSES, &g.pass_seconds(), comm).1,
         None => BTreeMap::new(),
     };
     let coupling_counts = match &sim.grains {
         Some(g) => {
             let mut v: Vec<f64> = g.counts().iter().map(|&c| c as f64).collect();
             comm.sum_f64(&mut v);
-            crate::coupling::COUNTS
+            coupling::COUNTS
                 .iter()
                 .zip(v)
                 .map(|(n, c)| (*n, c as u64))

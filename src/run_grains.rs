@@ -2,17 +2,18 @@
 //! time loop of named, timed stages — walls (removals), DEM step (with migration and
 //! ghost exchange inside), output — and the analyses, checks and `summary.json`.
 
-use crate::analysis::checks::{evaluate, CheckOutcome};
-use crate::analysis::collapse::{collapse_results, pile_shape, QUANTITIES};
-use crate::analysis::Results;
-use crate::dem::{Grains, SlabDem};
-use crate::io::atomic::{ensure_writable_dir, write_atomic};
-use crate::io::grains_checkpoint::{self, apply_walls, GrainRunState};
-use crate::io::grains_out::{write_grains_png, GrainWriter};
 use crate::progress::Progress;
 use crate::run::{stage_stats, RunError, RunOptions, StageStats, Status};
-use crate::scene::{GrainAnalysis, GrainScene, ValidGrainScene};
+use analysis::checks::{evaluate, CheckOutcome};
+use analysis::collapse::{collapse_results, pile_shape, QUANTITIES};
+use analysis::Results;
 use decomposition::Comm;
+use dem::walls::apply_walls;
+use dem::{Grains, SlabDem};
+use io::atomic::{ensure_writable_dir, write_atomic};
+use io::grains_checkpoint::{self, GrainRunState};
+use io::grains_out::{write_grains_png, GrainWriter};
+use scene::{GrainAnalysis, GrainScene, ValidGrainScene};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;

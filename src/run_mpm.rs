@@ -2,19 +2,19 @@
 //! the solver's timed stages (sort, P2G with the strip exchange, grid, stress, G2P,
 //! migration) plus output, and at the end the analyses, checks and `summary.json`.
 
-use crate::analysis::checks::{evaluate, CheckOutcome};
-use crate::analysis::collapse::{
-    collapse_results, thick_front, thick_front_results, PileShape, QUANTITIES, THICK_QUANTITIES,
-};
-use crate::analysis::Results;
-use crate::io::atomic::{ensure_writable_dir, write_atomic};
-use crate::io::mpm_checkpoint::{self, MpmRunState};
-use crate::io::mpm_out::{write_mpm_png, MpmWriter};
-use crate::mpm::{MpmError, MpmSystem, Points, MPM_STAGES};
 use crate::progress::Progress;
 use crate::run::{stage_stats, RunError, RunOptions, StageStats, Status};
-use crate::scene::{GrainAnalysis, MpmScene, PictureField, ValidMpmScene};
+use analysis::checks::{evaluate, CheckOutcome};
+use analysis::collapse::{
+    collapse_results, thick_front, thick_front_results, PileShape, QUANTITIES, THICK_QUANTITIES,
+};
+use analysis::Results;
 use decomposition::Comm;
+use io::atomic::{ensure_writable_dir, write_atomic};
+use io::mpm_checkpoint::{self, MpmRunState};
+use io::mpm_out::{write_mpm_png, MpmWriter};
+use mpm::{MpmError, MpmSystem, Points, MPM_STAGES};
+use scene::{GrainAnalysis, MpmScene, PictureField, ValidMpmScene};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;

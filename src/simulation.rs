@@ -1,18 +1,18 @@
 //! A simulation: the state of the physics a scene asked for, and `step()` as an ordered
 //! list of named, timed stages. A fluid-only scene holds only a lattice (this rank's slab).
 
-use crate::analysis::flows::{taylor_green_pressure, taylor_green_velocity};
-use crate::coupling::{CouplingError, LbmDem};
-use crate::gpu::{GpuContext, GpuFluid};
-use crate::io::probes::Series;
-use crate::lbm::fields::{Fields, Totals};
-use crate::lbm::lattice::StepError;
-use crate::lbm::{FluidBackend, Lattice, Real};
-use crate::run::RunError;
-use crate::scene::{
+use crate::error::RunError;
+use analysis::flows::{taylor_green_pressure, taylor_green_velocity};
+use coupling::{CouplingError, LbmDem};
+use decomposition::{Comm, Side, SlabHalo, SlabPartition};
+use io::probes::Series;
+use lbm::fields::{Fields, Totals};
+use lbm::gpu::{GpuContext, GpuFluid};
+use lbm::lattice::StepError;
+use lbm::{FluidBackend, Lattice, Real};
+use scene::{
     build_lattice, solid_id_of, Backend, GpuStorage, Initial, Kernel, Probe, Units, ValidScene,
 };
-use decomposition::{Comm, Side, SlabHalo, SlabPartition};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -128,7 +128,7 @@ impl<T: Real> Simulation<T> {
         backend: Backend,
         storage: GpuStorage,
         kernel: Kernel,
-        restored: Option<crate::coupling::RestoredCoupling>,
+        restored: Option<coupling::RestoredCoupling>,
     ) -> Result<Self, RunError> {
         let built = build_lattice(scene)?;
         let units = scene.units;
@@ -253,7 +253,7 @@ impl<T: Real> Simulation<T> {
             )?),
         };
         let grains = if scene.scene.grains.is_some() {
-            let c = LbmDem::new(
+            let c = crate::coupled::lbm_dem(
                 scene,
                 fluid.as_mut(),
                 &built.setup.faces,
@@ -290,7 +290,7 @@ impl<T: Real> Simulation<T> {
         let ramp_s = [&b.west, &b.east, &b.south, &b.north]
             .iter()
             .map(|f| match f {
-                crate::scene::BoundarySpec::Velocity { ramp_time_s, .. } => *ramp_time_s,
+                scene::BoundarySpec::Velocity { ramp_time_s, .. } => *ramp_time_s,
                 _ => 0.0,
             })
             .fold(0.0, f64::max);
@@ -464,13 +464,8 @@ impl<T: Real> Simulation<T> {
                         .expect("validated: deposit probes need grains");
                     let g = c.positions(comm);
                     let col = |k: usize| g.iter().map(|p| p[k]).collect::<Vec<f64>>();
-                    let shape = crate::analysis::collapse::pile_shape(
-                        &col(0),
-                        &col(1),
-                        &col(2),
-                        wall,
-                        floor,
-                    );
+                    let shape =
+                        analysis::collapse::pile_shape(&col(0), &col(1), &col(2), wall, floor);
                     s.push(step, t, &[shape.length_m, shape.height_m]);
                 }
                 ProbeTarget::Solid(id) => {

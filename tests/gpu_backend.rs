@@ -19,7 +19,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_grainflow");
 
 /// Whether wgpu finds an adapter; prints a skip notice when it does not.
 fn have_adapter(test: &str) -> bool {
-    let found = !grainflow::gpu::list_adapters().is_empty();
+    let found = !grainflow::lbm::gpu::list_adapters().is_empty();
     if !found {
         eprintln!("SKIPPED {test}: no GPU adapter (scripts/setup.sh installs Mesa lavapipe)");
     }
@@ -111,7 +111,7 @@ fn both_precisions(scene: &str) {
         return;
     }
     compare::<f32>(scene, 500, 1e-5);
-    let f64_ok = grainflow::gpu::list_adapters().iter().any(|a| a.f64);
+    let f64_ok = grainflow::lbm::gpu::list_adapters().iter().any(|a| a.f64);
     if f64_ok {
         compare::<f64>(scene, 500, 1e-12);
     } else {
@@ -316,7 +316,7 @@ fn fp16_storage_tracks_f32_on_the_cavity() {
     if !have_adapter("fp16 storage") {
         return;
     }
-    if !grainflow::gpu::list_adapters().iter().any(|a| a.f16) {
+    if !grainflow::lbm::gpu::list_adapters().iter().any(|a| a.f16) {
         eprintln!("SKIPPED fp16 storage: the adapter has no SHADER_F16");
         return;
     }

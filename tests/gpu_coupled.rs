@@ -11,7 +11,7 @@ use grainflow::run::{Backend, Kernel};
 
 #[test]
 fn coupled_gpu_step_matches_the_cpu_for_every_scheme() {
-    let adapters = grainflow::gpu::list_adapters();
+    let adapters = grainflow::lbm::gpu::list_adapters();
     if adapters.is_empty() {
         eprintln!("SKIPPED: no GPU adapter (scripts/setup.sh installs Mesa lavapipe)");
         return;
@@ -30,7 +30,7 @@ fn coupled_gpu_step_matches_the_cpu_for_every_scheme() {
 /// reads back (f64, where both backends round alike).
 #[test]
 fn coupled_gpu_blow_up_names_the_cpus_step_cell_and_grain() {
-    let adapters = grainflow::gpu::list_adapters();
+    let adapters = grainflow::lbm::gpu::list_adapters();
     if !adapters.iter().any(|a| a.f64) {
         eprintln!("SKIPPED: no GPU adapter with f64");
         return;

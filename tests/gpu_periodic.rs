@@ -59,7 +59,7 @@ output_every = 0
 
 #[test]
 fn coupled_gpu_step_matches_the_cpu_across_periodic_seams() {
-    let adapters = grainflow::gpu::list_adapters();
+    let adapters = grainflow::lbm::gpu::list_adapters();
     if !adapters.iter().any(|a| a.f64) {
         eprintln!("SKIPPED: no GPU adapter with f64 (scripts/setup.sh installs Mesa lavapipe)");
         return;

@@ -223,7 +223,7 @@ fn coupled_checkpoints_are_refused_by_the_wrong_scene() {
 /// starts): in the closed tank, and with grains reaching across the periodic x faces.
 #[test]
 fn coupled_gpu_runs_on_2_ranks_match_1_gpu_rank() {
-    if grainflow::gpu::list_adapters().is_empty() {
+    if grainflow::lbm::gpu::list_adapters().is_empty() {
         eprintln!("SKIPPED: no GPU adapter (scripts/setup.sh installs Mesa lavapipe)");
         return;
     }

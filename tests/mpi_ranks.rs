@@ -195,7 +195,7 @@ fn sigterm_writes_a_checkpoint_and_the_restart_matches_an_uninterrupted_run() {
 /// GPU checkpoint restarted on another rank count.
 #[test]
 fn gpu_backend_on_2_and_3_ranks_matches_1_gpu_rank() {
-    if grainflow::gpu::list_adapters().is_empty() {
+    if grainflow::lbm::gpu::list_adapters().is_empty() {
         eprintln!("SKIPPED: no GPU adapter (scripts/setup.sh installs Mesa lavapipe)");
         return;
     }

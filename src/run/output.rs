@@ -1,14 +1,14 @@
 //! Snapshot output of a fluid run: the HDF5 series (every rank its block), the grains of a
 //! coupled run beside it, and the pictures (rank 0).
 
-use crate::io::hdf5_out::{FieldSpec, Layout, SnapshotWriter};
-use crate::io::picture::{robust_limit, write_field_png, Scale};
-use crate::io::OutputError;
-use crate::lbm::fields::Fields;
-use crate::lbm::Real;
-use crate::scene::{FieldName, Units, ValidScene};
 use crate::simulation::Simulation;
 use decomposition::Comm;
+use io::hdf5_out::{FieldSpec, Layout, SnapshotWriter};
+use io::picture::{robust_limit, write_field_png, Scale};
+use io::OutputError;
+use lbm::fields::Fields;
+use lbm::Real;
+use scene::{FieldName, Units, ValidScene};
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -23,7 +23,7 @@ pub(super) struct Output {
     pub(super) bytes: u64,
     pub(super) write_s: f64,
     /// `grains.h5` + `grains.xdmf` of a coupled run.
-    grains: Option<crate::io::grains_out::GrainWriter>,
+    grains: Option<io::grains_out::GrainWriter>,
 }
 
 impl Output {
@@ -47,7 +47,7 @@ impl Output {
             bytes: 0,
             write_s: 0.0,
             grains: match scene.scene.grains {
-                Some(_) => Some(crate::io::grains_out::GrainWriter::open(
+                Some(_) => Some(io::grains_out::GrainWriter::open(
                     dir,
                     comm,
                     resume_after,
@@ -125,7 +125,7 @@ impl Output {
                 [0.0, 0.0],
                 [cells[0] as f64 * u.dx_m, cells[1] as f64 * u.dx_m],
             );
-            crate::io::grains_out::write_grains_png(
+            io::grains_out::write_grains_png(
                 &self.dir.join(format!("pictures/grains_{step:08}.png")),
                 c.system(),
                 region,

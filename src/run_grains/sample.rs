@@ -1,12 +1,12 @@
 //! The sample of a grains run: packed (random addition, distributed settling, trimming)
 //! or loaded, spread over the ranks' slabs; and the collective gathers of its state.
 
-use crate::dem::parallel::balanced_bounds;
-use crate::dem::sample::{load_csv, random_sequential_addition};
-use crate::dem::{DemError, DemSystem, Grains, SlabDem};
-use crate::run::RunError;
-use crate::scene::{size_distribution, SampleSpec, ValidGrainScene};
+use crate::error::RunError;
 use decomposition::Comm;
+use dem::parallel::balanced_bounds;
+use dem::sample::{load_csv, random_sequential_addition};
+use dem::{DemError, DemSystem, Grains, SlabDem};
+use scene::{size_distribution, SampleSpec, ValidGrainScene};
 
 /// Every rank's owned grains, gathered on every rank and sorted by id (collective).
 pub fn gather_grains(sys: &DemSystem, comm: &dyn Comm) -> Grains {

@@ -1,0 +1,284 @@
+//! Derived quantities computed at the end of a run, and pass/fail checks on them.
+//!
+//! Each [`scene::Analysis`] produces named results (`poiseuille.max_rel_error`,
+//! `<probe>.strouhal`, …). [`checks::evaluate`] compares them with the scene's checks.
+
+pub mod checks;
+pub mod collapse;
+pub mod flows;
+pub mod sedimentation;
+mod share;
+mod signals;
+pub use share::share_from_root;
+
+use io::probes::Series;
+use lbm::fields::{Fields, Totals};
+use scene::{Analysis, ValidScene};
+use std::collections::BTreeMap;
+use thiserror::Error;
+
+/// Named results, sorted by name.
+pub type Results = BTreeMap<String, f64>;
+
+/// (x, y, r) of every grain (m), by id.
+pub type GrainDisks = Vec<[f64; 3]>;
+
+/// Momentum of the fluid and of the grains (kg·m/s per metre of depth).
+pub type MomentumPair = [[f64; 2]; 2];
+
+/// An analysis that could not be computed.
+#[derive(Debug, Clone, Error)]
+#[error("analysis `{analysis}`: {message}")]
+pub struct AnalysisError {
+    /// Which analysis.
+    pub analysis: String,
+    /// What went wrong.
+    pub message: String,
+}
+
+/// What the analyses read: the final state and the recorded series.
+pub struct Inputs<'a> {
+    /// The scene.
+    pub scene: &'a ValidScene,
+    /// Final fields of the whole lattice, lattice units: `Some` where the scene's analyses
+    /// read them ([`needs_fields`]; the run gathers them on rank 0 only), else `None`.
+    pub fields: Option<&'a Fields>,
+    /// Steps taken.
+    pub steps: u64,
+    /// Probe series.
+    pub series: &'a [Series],
+    /// Totals at step 0 and at the end.
+    pub totals: (Totals, Totals),
+    /// Momentum (fluid, grains) at the start and the end of a coupled run (kg·m/s per m).
+    pub momentum: Option<(MomentumPair, MomentumPair)>,
+    /// (id, radius m) of every grain of a coupled run.
+    pub grain_radius: Vec<(u64, f64)>,
+    /// (x, y, r) of every grain of a coupled run when it started and at the end (m), by id.
+    pub grains: Option<(GrainDisks, GrainDisks)>,
+}
+
+/// The result names a scene's analyses will produce (to validate checks before running).
+pub fn result_names(scene: &ValidScene) -> Vec<String> {
+    let mut names = vec!["run.mass".to_string(), "run.max_speed_m_s".to_string()];
+    for a in &scene.scene.analyses {
+        match a {
+            Analysis::Poiseuille => names.extend(
+                [
+                    "max_rel_error",
+                    "l2_rel_error",
+                    "peak_rel_error",
+                    "centreline_velocity_m_s",
+                ]
+                .map(|q| format!("poiseuille.{q}")),
+            ),
+            Analysis::Couette => names.push("couette.l2_rel_error".into()),
+            Analysis::TaylorGreen => names.push("taylor_green.l2_rel_error".into()),
+            Analysis::Ghia { .. } => {
+                names.extend(["ghia.max_u_deviation".into(), "ghia.max_v_deviation".into()])
+            }
+            Analysis::ForceCoefficients { probe, .. } => names.extend([
+                format!("{probe}.drag_coefficient"),
+                format!("{probe}.lift_coefficient"),
+            ]),
+            Analysis::Strouhal { probe, .. } => names.extend([
+                format!("{probe}.strouhal"),
+                format!("{probe}.relative_oscillation"),
+            ]),
+            Analysis::MassDrift => names.push("mass.relative_drift".into()),
+            Analysis::Settling { probe, .. } => names.extend(
+                [
+                    "settling_velocity_m_s",
+                    "reynolds",
+                    "drag_coefficient",
+                    "velocity_drift",
+                ]
+                .map(|q| format!("{probe}.{q}")),
+            ),
+            Analysis::DraftKissTumble { .. } => names.extend(
+                [
+                    "kiss_time",
+                    "min_gap",
+                    "tumble_time",
+                    "separation_time",
+                    "draft",
+                    "tumbled",
+                    "separated",
+                    "lower_velocity_m_s",
+                    "upper_velocity_m_s",
+                    "second_kiss_time",
+                    "leader_fall_m_s",
+                    "trailer_fall_m_s",
+                    "leader_fall_deviation",
+                    "trailer_fall_deviation",
+                ]
+                .map(|q| format!("dkt.{q}")),
+            ),
+            Analysis::ColumnCollapse { .. } => {
+                names.extend(collapse::QUANTITIES.map(|q| format!("collapse.{q}")));
+                names.extend(
+                    [
+                        "front_t95",
+                        "packing_fraction",
+                        "pore_pressure_min_pa",
+                        "pore_pressure_max_pa",
+                    ]
+                    .map(|q| format!("collapse.{q}")),
+                );
+            }
+            Analysis::MomentumBalance => names.extend(
+                [
+                    "relative_drift",
+                    "fluid_x_kg_m_s",
+                    "fluid_y_kg_m_s",
+                    "grains_x_kg_m_s",
+                    "grains_y_kg_m_s",
+                ]
+                .map(|q| format!("momentum.{q}")),
+            ),
+        }
+    }
+    names
+}
+
+/// Whether any of the scene's analyses reads the final fields (the reference flows); the
+/// others read probes, totals and grains, so a run gathers no lattice for them.
+pub fn needs_fields(scene: &ValidScene) -> bool {
+    scene.scene.analyses.iter().any(|a| {
+        matches!(
+            a,
+            Analysis::Poiseuille
+                | Analysis::Couette
+                | Analysis::TaylorGreen
+                | Analysis::Ghia { .. }
+        )
+    })
+}
+
+/// Run every analysis of the scene.
+pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
+    let mut r = Results::new();
+    let u = &inp.scene.units;
+    r.insert("run.mass".into(), inp.totals.1.mass);
+    r.insert(
+        "run.max_speed_m_s".into(),
+        u.velocity_to_si(inp.totals.1.max_speed),
+    );
+    for a in &inp.scene.scene.analyses {
+        match a {
+            Analysis::Poiseuille => flows::poiseuille(inp, &mut r)?,
+            Analysis::Couette => flows::couette(inp, &mut r)?,
+            Analysis::TaylorGreen => flows::taylor_green(inp, &mut r)?,
+            Analysis::Ghia {
+                u_reference,
+                v_reference,
+                column,
+            } => flows::ghia(inp, u_reference, v_reference, column, &mut r)?,
+            Analysis::ForceCoefficients {
+                probe,
+                velocity_m_s,
+                length_m,
+                average_last_s,
+            } => signals::force_coefficients(
+                inp,
+                probe,
+                *velocity_m_s,
+                *length_m,
+                *average_last_s,
+                &mut r,
+            )?,
+            Analysis::Strouhal {
+                probe,
+                signal,
+                velocity_m_s,
+                length_m,
+                skip_s,
+            } => signals::strouhal(
+                inp,
+                probe,
+                *signal,
+                *velocity_m_s,
+                *length_m,
+                *skip_s,
+                &mut r,
+            )?,
+            Analysis::MassDrift => {
+                let (a, b) = (inp.totals.0.mass, inp.totals.1.mass);
+                r.insert("mass.relative_drift".into(), (b - a) / a);
+            }
+            Analysis::Settling {
+                probe,
+                average_last_s,
+            } => sedimentation::settling(inp, probe, *average_last_s, &mut r)?,
+            Analysis::DraftKissTumble {
+                lower,
+                upper,
+                contact_gap_m,
+                average_last_s,
+                fall_window_s,
+                terminal_velocity_m_s,
+            } => sedimentation::draft_kiss_tumble(
+                inp,
+                &sedimentation::DktSetup {
+                    lower,
+                    upper,
+                    contact_gap_m: *contact_gap_m,
+                    window_s: *average_last_s,
+                    fall_window_s: *fall_window_s,
+                    terminal_velocity_m_s: *terminal_velocity_m_s,
+                },
+                &mut r,
+            )?,
+            Analysis::ColumnCollapse {
+                wall_x_m,
+                floor_y_m,
+                deposit,
+                pore_pressure,
+            } => collapse::submerged(
+                inp,
+                (*wall_x_m, *floor_y_m),
+                deposit,
+                pore_pressure.as_deref(),
+                &mut r,
+            )?,
+            Analysis::MomentumBalance => {
+                let Some((p0, p1)) = inp.momentum else {
+                    return Err(err("momentum-balance", "the run has no grains"));
+                };
+                let total = |p: &[[f64; 2]; 2]| [p[0][0] + p[1][0], p[0][1] + p[1][1]];
+                let (a, b) = (total(&p0), total(&p1));
+                let norm = a[0].hypot(a[1]);
+                if norm == 0.0 {
+                    return Err(err(
+                        "momentum-balance",
+                        "the initial momentum is zero: give a grain or the fluid a velocity",
+                    ));
+                }
+                r.insert(
+                    "momentum.relative_drift".into(),
+                    (b[0] - a[0]).hypot(b[1] - a[1]) / norm,
+                );
+                r.insert("momentum.fluid_x_kg_m_s".into(), p1[0][0]);
+                r.insert("momentum.fluid_y_kg_m_s".into(), p1[0][1]);
+                r.insert("momentum.grains_x_kg_m_s".into(), p1[1][0]);
+                r.insert("momentum.grains_y_kg_m_s".into(), p1[1][1]);
+            }
+        }
+    }
+    Ok(r)
+}
+
+/// The error an analysis that panicked becomes (the panic's message went to stderr), so that
+/// every rank of a distributed run stops with it.
+pub fn panicked() -> AnalysisError {
+    err(
+        "(all)",
+        "an analysis panicked (a bug: please report it with the scene); its message is above",
+    )
+}
+
+pub(crate) fn err(analysis: &str, message: impl Into<String>) -> AnalysisError {
+    AnalysisError {
+        analysis: analysis.into(),
+        message: message.into(),
+    }
+}

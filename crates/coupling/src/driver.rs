@@ -1,0 +1,619 @@
+//! The coupled grains of a fluid scene on one rank's slab: the distributed DEM, the coupler,
+//! the ghost grains, and the unit conversions between them (the DEM works in SI, the coupler
+//! in lattice units).
+//!
+//! A grain belongs to the rank whose fluid slab holds its centre (the DEM's slabs are the
+//! fluid's). Forces on a grain are summed per lattice column wherever its cells are, and
+//! its owner adds the columns in order, so a coupled run gives the same bits on any number
+//! of ranks (tested with mpirun).
+
+use super::exchange::{Coupler, CouplingError, Unstable};
+use super::ghosts::{GhostState, GrainHalo};
+use super::map::{GrainView, SlabFrame};
+use super::sums::{total, ColumnSums, Load};
+use super::{Refill, Scheme};
+use decomposition::{Comm, SlabPartition};
+use dem::walls::{apply_walls, WallStates};
+use dem::{DemError, DemSetup, DemSystem, Grains, SlabDem};
+use lbm::lattice::{Face, FaceCondition};
+use lbm::moving::{MovingCells, PlanKind};
+use lbm::units::Units;
+use lbm::{FluidBackend, Real};
+use rayon::prelude::*;
+use thiserror::Error;
+
+mod report;
+mod repulsion;
+mod setup;
+
+pub use setup::{check_grains, fluid_walls, MIN_CELLS_PER_DIAMETER};
+
+/// Where a grain in view comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Source {
+    /// This rank owns it (index among the owned grains).
+    Owned(u32),
+    /// A ghost from the neighbour on this side.
+    Ghost(u8),
+}
+
+/// Values carried with each owned grain through the DEM's migration: the previous step's
+/// hydrodynamic force and torque (for the two-step average), then the one held in the last
+/// advance (both SI).
+const CARRY: usize = 6;
+
+/// What a restart gives the coupled grains instead of preparing the sample.
+pub struct RestoredCoupling {
+    /// Every grain, sorted by id, with the forces of its last evaluation.
+    pub grains: Grains,
+    /// Pair and wall contact history.
+    pub history: dem::system::HistoryMap,
+    /// Wall ends and removal flags.
+    pub walls: WallStates,
+    /// DEM time (s) and steps.
+    pub clock: (f64, u64),
+    /// Per grain, by id: external force held (SI), the previous hydrodynamic force (SI)
+    /// and the pending hand-over (lattice units).
+    pub per_grain: Vec<(u64, [f64; 9])>,
+}
+
+/// A DEM error from spreading the grains over the slabs: the rank count is the scene's to
+/// change.
+fn slab_error(e: DemError) -> SetupError {
+    match e {
+        DemError::Parameter { name: "ranks", .. } => SetupError::Invalid {
+            key: "ranks",
+            message: format!("{e} (the grains follow the fluid's slabs)"),
+        },
+        e => SetupError::Dem(e),
+    }
+}
+
+/// Grains coupled to this rank's slab of the fluid.
+pub struct LbmDem {
+    /// The grains and their contacts (SI units, N and m per metre of depth), distributed
+    /// over the fluid's slabs.
+    pub dem: SlabDem,
+    coupler: Coupler,
+    halo: GrainHalo,
+    substeps: u32,
+    units: Units,
+    /// Domain size (m).
+    domain: [f64; 2],
+    /// Grains in view (owned, then ghosts, merged in increasing id), lattice units.
+    views: Vec<GrainView>,
+    ids: Vec<u64>,
+    source: Vec<Source>,
+    /// Masses of the grains in view (kg/m), for the repulsion.
+    mass: Vec<f64>,
+    /// Per owned grain: its view.
+    view_of: Vec<u32>,
+    /// Per owned grain: the last exchange's load and the last remap's hand-over (lattice).
+    load: Vec<Load>,
+    handover: Vec<Load>,
+    /// Hold the average of the last two steps' forces.
+    average: bool,
+    /// Repulsion (range m, strength in submerged weights), if on.
+    repulsion: Option<(f64, f64)>,
+    /// |g| (1 − ρ/ρ_s): submerged weight per unit mass (m/s²).
+    reduced_gravity: f64,
+    /// Walls to remove at a time (index, time s).
+    removals: Vec<(usize, f64)>,
+    /// Fluid steps taken (for messages).
+    step: u64,
+    /// Scratch for partial sums.
+    partials: Vec<(u32, Load)>,
+}
+
+/// What the coupled grains are, in plain numbers: everything [`LbmDem::new`] takes besides
+/// the grains and the fluid. The driver builds it from a scene.
+#[derive(Debug, Clone)]
+pub struct LbmDemSetup {
+    /// Interface scheme.
+    pub scheme: Scheme,
+    /// How a cell a grain uncovers is refilled (bounce-back schemes).
+    pub refill: Refill,
+    /// SI ↔ lattice units of the fluid.
+    pub units: Units,
+    /// Domain size (m), the fluid's.
+    pub domain_m: [f64; 2],
+    /// The DEM: the scene's own walls (a wall along each wall face of the fluid is added
+    /// to them), contact model, gravity reduced by buoyancy (m/s²), λ, and the sub-step
+    /// Δt/n_s (s).
+    pub dem: DemSetup,
+    /// Friction of the walls added along the fluid's wall faces.
+    pub face_wall_friction: f64,
+    /// DEM sub-steps n_s per fluid step.
+    pub substeps: u32,
+    /// Whether the grains may start overlapping (a settled sample presses into itself).
+    pub allow_overlap: bool,
+    /// Global damping of the grains' motion (1/s).
+    pub global_damping_1_s: f64,
+    /// Hold the average of the last two steps' forces.
+    pub average_forces: bool,
+    /// Short-range repulsion (range m, strength in submerged weights), if on.
+    pub repulsion: Option<(f64, f64)>,
+    /// Walls to remove at a time (index among the scene's walls, time s).
+    pub removals: Vec<(usize, f64)>,
+}
+
+/// Why the coupled grains could not be set up.
+#[derive(Debug, Error)]
+pub enum SetupError {
+    /// A value of the scene does not work: the key it belongs to and what to do.
+    #[error("{key}: {message}")]
+    Invalid {
+        /// The scene key.
+        key: &'static str,
+        /// What is wrong and the fix.
+        message: String,
+    },
+    /// The DEM refused the grains.
+    #[error(transparent)]
+    Dem(#[from] DemError),
+}
+
+impl LbmDem {
+    /// Add a DEM wall on every wall face of the fluid (`faces`: the whole lattice's) to
+    /// the walls of `setup`, spread `grains` (every grain, sorted by id: the prepared sample
+    /// or, with `restored`, the checkpoint's) over the slabs of `partition`, and place them
+    /// on this rank's `fluid`. Errors name the key: a slab too narrow for the grains.
+    /// Collective.
+    pub fn new<T: Real>(
+        setup: LbmDemSetup,
+        grains: Grains,
+        restored: Option<RestoredCoupling>,
+        fluid: &mut dyn FluidBackend<T>,
+        faces: &[FaceCondition; 4],
+        partition: &SlabPartition,
+        comm: &dyn Comm,
+    ) -> Result<Self, SetupError> {
+        let LbmDemSetup {
+            scheme,
+            refill,
+            units,
+            domain_m: domain,
+            dem: mut dem_setup,
+            face_wall_friction,
+            substeps,
+            allow_overlap,
+            global_damping_1_s,
+            average_forces,
+            repulsion,
+            removals,
+        } = setup;
+        let along_faces = fluid_walls(faces, domain, face_wall_friction, &dem_setup.walls);
+        dem_setup.walls.extend(along_faces);
+        let gravity = dem_setup.gravity;
+        let bounds: Vec<f64> = (0..=comm.size())
+            .map(|r| {
+                let x = if r < comm.size() {
+                    partition.slab(r).x_begin
+                } else {
+                    partition.columns()
+                };
+                x as f64 * units.dx_m
+            })
+            .collect();
+        let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
+        let fresh = restored.is_none();
+        let (mut dem, per_grain) = match restored {
+            None => {
+                let d = SlabDem::new(grains, &bounds, dem_setup, allow_overlap, comm);
+                (d.map_err(slab_error)?, Vec::new())
+            }
+            Some(r) => {
+                apply_walls(&mut dem_setup.walls, &r.walls);
+                let d = SlabDem::restore(grains, r.history, &bounds, dem_setup, r.clock, comm);
+                (d.map_err(slab_error)?, r.per_grain)
+            }
+        };
+        dem.system.global_damping = global_damping_1_s;
+        // Grain indices must stay fixed between migrations: the held forces follow them.
+        dem.system.spatial_sort = false;
+        dem.rebalance_every = 0;
+        dem.system.enable_carry(CARRY);
+        let range = repulsion.map_or(0.0, |r| r.0);
+        // A neighbour sees a grain that reaches its cells (two cells beyond the radius, plus
+        // the halo column) or that can repel one of its grains.
+        let margin = (3.0 * units.dx_m).max(rmax + range + DemSystem::skin_for(rmax) + units.dx_m);
+        let narrowest = (0..comm.size())
+            .map(|r| partition.slab(r).width())
+            .min()
+            .unwrap_or(0) as f64
+            * units.dx_m;
+        if comm.size() > 1 && narrowest < 2.0 * rmax + margin {
+            return Err(SetupError::Invalid {
+                key: "ranks",
+                message: format!(
+                    "a fluid slab is {narrowest} m wide, narrower than a grain's reach \
+                     ({:.3e} m): run on fewer ranks",
+                    2.0 * rmax + margin
+                ),
+            });
+        }
+        let lat = fluid.lattice();
+        let periodic_x = faces[Face::West as usize] == FaceCondition::Periodic;
+        let frame = SlabFrame {
+            nx: lat.nx(),
+            ny: lat.ny(),
+            x0: lat.x_offset(),
+            global_nx: lat.global_nx(),
+            stride: lat.stride(),
+            periodic_x,
+            periodic_y: faces[Face::South as usize] == FaceCondition::Periodic,
+        };
+        let halo = GrainHalo::new(partition, comm.rank(), units.dx_m, periodic_x, margin);
+        let owned = dem.system.owned();
+        let mut me = Self {
+            dem,
+            coupler: Coupler::new(scheme, refill, frame),
+            halo,
+            substeps,
+            units,
+            domain,
+            views: Vec::new(),
+            ids: Vec::new(),
+            source: Vec::new(),
+            mass: Vec::new(),
+            view_of: Vec::new(),
+            load: vec![[0.0; 3]; owned],
+            handover: vec![[0.0; 3]; owned],
+            average: average_forces,
+            repulsion,
+            reduced_gravity: gravity[0].hypot(gravity[1]),
+            removals,
+            step: lat.steps_done(),
+            partials: Vec::new(),
+        };
+        if !fresh {
+            me.restore_per_grain(&per_grain);
+        }
+        me.refresh_views(comm);
+        me.coupler.start(fluid, &me.views, &me.ids, fresh);
+        Ok(me)
+    }
+
+    /// Put each owned grain's checkpointed state (by id) back in place.
+    fn restore_per_grain(&mut self, rows: &[(u64, [f64; 9])]) {
+        let sys = &mut self.dem.system;
+        let mut external = Vec::with_capacity(sys.owned());
+        for i in 0..sys.owned() {
+            let id = sys.grains.id[i];
+            let p = rows
+                .binary_search_by_key(&id, |r| r.0)
+                .map(|k| rows[k].1)
+                .unwrap_or([0.0; 9]);
+            external.push([p[0], p[1], p[2]]);
+            sys.carry_mut(i)[..3].copy_from_slice(&p[3..6]);
+            self.handover[i] = [p[6], p[7], p[8]];
+        }
+        sys.restore_external(external);
+    }
+
+    /// DEM sub-steps per fluid step.
+    pub fn substeps(&self) -> u32 {
+        self.substeps
+    }
+
+    /// Seconds this rank spent in each pass of the "coupling" stage ([`super::PASSES`]).
+    pub fn pass_seconds(&self) -> [f64; 6] {
+        self.coupler.pass_seconds()
+    }
+
+    /// This rank's counts of [`super::COUNTS`] (see [`Coupler::counts`]).
+    pub fn counts(&self) -> [u64; 6] {
+        self.coupler.counts()
+    }
+
+    /// The coupler (maps, loads).
+    pub fn coupler(&self) -> &Coupler {
+        &self.coupler
+    }
+
+    /// The DEM system of this rank (owned grains first).
+    pub fn system(&self) -> &DemSystem {
+        &self.dem.system
+    }
+
+    /// Hydrodynamic force and torque on owned grain `i` held during the last advance
+    /// (N/m, N·m/m).
+    pub fn hydrodynamic(&self, i: usize) -> [f64; 3] {
+        let c = self.dem.system.carry(i);
+        [c[3], c[4], c[5]]
+    }
+
+    /// Grains in view (owned and ghosts, increasing id), lattice units.
+    pub fn views(&self) -> &[GrainView] {
+        &self.views
+    }
+
+    /// Owned grains as their ghosts see them.
+    fn owned_states(&self) -> Vec<GhostState> {
+        let g = &self.dem.system.grains;
+        (0..self.dem.system.owned())
+            .map(|i| GhostState {
+                id: g.id[i],
+                x: [g.x[i], g.y[i]],
+                r: g.r[i],
+                m: g.m[i],
+                v: [g.vx[i], g.vy[i]],
+                omega: g.omega[i],
+            })
+            .collect()
+    }
+
+    /// Exchange ghosts with the neighbours and rebuild the views: owned and ghost grains in
+    /// increasing id, in lattice units. Collective.
+    fn refresh_views(&mut self, comm: &dyn Comm) {
+        let owned = self.owned_states();
+        let ghosts = if self.halo.has_peers() {
+            self.halo.exchange_states(comm, &owned)
+        } else {
+            Vec::new()
+        };
+        let mut all: Vec<(GhostState, Source)> = owned
+            .into_iter()
+            .enumerate()
+            .map(|(i, s)| (s, Source::Owned(i as u32)))
+            .chain(
+                ghosts
+                    .into_iter()
+                    .map(|(s, side)| (s, Source::Ghost(side as u8))),
+            )
+            .collect();
+        all.sort_by_key(|(s, _)| s.id);
+        // Two ranks across a periodic face: a grain near both faces arrives once per side.
+        all.dedup_by_key(|(s, _)| s.id);
+        let (dx, dt) = (self.units.dx_m, self.units.dt_s);
+        self.views.clear();
+        self.ids.clear();
+        self.source.clear();
+        self.mass.clear();
+        self.view_of.clear();
+        self.view_of.resize(self.dem.system.owned(), 0);
+        for (v, (s, src)) in all.iter().enumerate() {
+            self.views.push(GrainView {
+                centre: [s.x[0] / dx, s.x[1] / dx],
+                radius: s.r / dx,
+                velocity: [s.v[0] * dt / dx, s.v[1] * dt / dx],
+                omega: s.omega * dt,
+            });
+            self.ids.push(s.id);
+            self.source.push(*src);
+            self.mass.push(s.m);
+            if let Source::Owned(i) = src {
+                self.view_of[*i as usize] = v as u32;
+            }
+        }
+    }
+
+    /// Each owned grain's total of `sums` (per-column partial sums over views): the ghosts'
+    /// partial sums go back to the ranks they came from, and every owner adds its grains'
+    /// columns in order. Collective.
+    fn reduce(&mut self, which: Which, comm: &dyn Comm) -> Vec<Load> {
+        let sums: &ColumnSums = match which {
+            Which::Exchange => self.coupler.loads(),
+            Which::Handover => self.coupler.handover_loads(),
+        };
+        let mut remote: Vec<(u64, u32, Load)> = Vec::new();
+        if self.halo.has_peers() {
+            let mut out = [Vec::new(), Vec::new()];
+            for (v, src) in self.source.iter().enumerate() {
+                if let Source::Ghost(side) = *src {
+                    sums.partials(v, &mut self.partials);
+                    let msg = &mut out[side as usize];
+                    msg.extend_from_slice(&[
+                        f64::from_bits(self.ids[v]),
+                        self.partials.len() as f64,
+                    ]);
+                    for (c, l) in &self.partials {
+                        msg.extend_from_slice(&[*c as f64, l[0], l[1], l[2]]);
+                    }
+                }
+            }
+            let got = self.halo.return_loads(comm, [&out[0], &out[1]]);
+            for msg in &got {
+                let mut at = 0;
+                while at < msg.len() {
+                    let (id, n) = (msg[at].to_bits(), msg[at + 1] as usize);
+                    for e in msg[at + 2..at + 2 + 4 * n].chunks_exact(4) {
+                        remote.push((id, e[0] as u32, [e[1], e[2], e[3]]));
+                    }
+                    at += 2 + 4 * n;
+                }
+            }
+            remote.sort_by_key(|r| (r.0, r.1));
+        }
+        // Each owned grain's total on its own: the same bits in any order. In parallel over
+        // the grains when there are threads to share it (on one thread a parallel region
+        // only adds the pool's wake-up).
+        let owned = self.dem.system.owned();
+        let (view_of, ids, remote) = (&self.view_of, &self.ids, &remote);
+        let grain_total = |partials: &mut Vec<(u32, Load)>, i: usize| {
+            let v = view_of[i] as usize;
+            let id = ids[v];
+            let from = remote.partition_point(|r| r.0 < id);
+            let to = remote.partition_point(|r| r.0 <= id);
+            if from == to {
+                // All its columns here: added in window order when that is column order.
+                if let Some(t) = sums.total_in_order(v) {
+                    return t;
+                }
+            }
+            sums.partials(v, partials);
+            partials.extend(remote[from..to].iter().map(|r| (r.1, r.2)));
+            total(partials)
+        };
+        let mut totals = Vec::with_capacity(owned);
+        if rayon::current_num_threads() > 1 {
+            (0..owned)
+                .into_par_iter()
+                .with_min_len(256)
+                .map_init(Vec::new, grain_total)
+                .collect_into_vec(&mut totals);
+        } else {
+            let partials = &mut self.partials;
+            totals.extend((0..owned).map(|i| grain_total(partials, i)));
+        }
+        totals
+    }
+
+    /// Stage "coupling" before the sweep: plan the cells at the grains' surfaces (see
+    /// [`Coupler::plan`]).
+    pub fn plan<T: Real>(&mut self, fluid: &dyn FluidBackend<T>) {
+        let kind = match self.coupler.scheme() {
+            super::Scheme::Psm => PlanKind::Partial,
+            _ => PlanKind::Links,
+        };
+        self.coupler
+            .plan(fluid.lattice(), &self.views, fluid.sums_per_body(kind));
+    }
+
+    /// The planned cells, for the fluid's sweep.
+    pub fn moving(&mut self) -> MovingCells<'_> {
+        self.coupler.moving()
+    }
+
+    /// Stage "coupling" after the sweep: every grain's load is summed on its owner. `bad`
+    /// is what the sweep reported. Errors (on every rank) when a recomputed cell went bad.
+    /// Collective.
+    pub fn exchange(
+        &mut self,
+        step: u64,
+        bad: Option<(usize, f64)>,
+        comm: &dyn Comm,
+    ) -> Result<(), CouplingError> {
+        self.step = step;
+        let bad = self.coupler.collect(&self.views, bad);
+        self.agree(comm, bad)?;
+        let t = std::time::Instant::now();
+        self.load = self.reduce(Which::Exchange, comm);
+        self.coupler.passes[super::pass::REDUCE] += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Show the grains in the fluid's fields: the fluid under them at rest at their velocity
+    /// (bounce-back schemes; see [`Coupler::fill_rest`]).
+    pub fn fill_rest<T: Real>(&mut self, fluid: &mut dyn FluidBackend<T>) {
+        self.coupler.fill_rest(fluid, &self.views);
+    }
+
+    /// The first bad cell over all ranks, known to every rank. Collective.
+    fn agree(&self, comm: &dyn Comm, bad: Option<Unstable>) -> Result<(), CouplingError> {
+        if !comm.any(bad.is_some()) {
+            return Ok(());
+        }
+        let mine = match bad {
+            Some((k, g, density)) => {
+                let f = self.frame();
+                let (x, y) = f.local(k);
+                vec![
+                    (x + f.x0 as i64) as f64,
+                    y as f64,
+                    f64::from_bits(self.ids[g as usize]),
+                    density,
+                ]
+            }
+            None => Vec::new(),
+        };
+        let all = comm.all_gather_f64(&mine);
+        Err(CouplingError::Unstable {
+            step: self.step,
+            x: all[0] as usize,
+            y: all[1] as usize,
+            grain: all[2].to_bits(),
+            density: all[3],
+        })
+    }
+
+    fn frame(&self) -> SlabFrame {
+        self.coupler.frame
+    }
+
+    /// Stage "dem": hold the hydrodynamic force (and the repulsion) and take the DEM
+    /// sub-steps of one fluid step, then exchange the ghosts. Errors (on every rank) when a
+    /// grain leaves the fluid domain. Collective.
+    pub fn advance(&mut self, comm: &dyn Comm) -> Result<(), CouplingError> {
+        let u = self.units;
+        let owned = self.dem.system.owned();
+        let mut held = Vec::with_capacity(owned);
+        for i in 0..owned {
+            let (a, b) = (self.load[i], self.handover[i]);
+            // Lattice momentum per step → N/m; the torque's arm is in cells (× Δx).
+            let h = [
+                u.force_to_si(a[0] + b[0]),
+                u.force_to_si(a[1] + b[1]),
+                u.force_to_si(a[2] + b[2]) * u.dx_m,
+            ];
+            let carry = self.dem.system.carry_mut(i);
+            if self.average {
+                // Ladd 1994 (part I, §4): the force of two successive steps, averaged, damps
+                // the step-to-step oscillation that makes explicit bounce-back coupling
+                // unstable for light grains (their rotation first).
+                held.push([
+                    0.5 * (h[0] + carry[0]),
+                    0.5 * (h[1] + carry[1]),
+                    0.5 * (h[2] + carry[2]),
+                ]);
+                carry[..3].copy_from_slice(&h);
+            } else {
+                held.push(h);
+            }
+            carry[3..].copy_from_slice(&h);
+        }
+        if let Some((range, strength)) = self.repulsion {
+            self.add_repulsion(range, strength, &mut held);
+        }
+        self.dem.system.set_external(&held);
+        let t_end = self.dem.system.time + u.dt_s;
+        for (w, t) in &self.removals {
+            if *t <= t_end && !self.dem.system.walls[*w].removed {
+                self.dem.system.remove_wall(*w);
+            }
+        }
+        for _ in 0..self.substeps {
+            self.dem.step(comm);
+        }
+        let g = &self.dem.system.grains;
+        let outside: Vec<f64> = (0..self.dem.system.owned())
+            .filter(|&i| {
+                let (x, y) = (g.x[i], g.y[i]);
+                !(x >= 0.0 && y >= 0.0 && x <= self.domain[0] && y <= self.domain[1])
+            })
+            .flat_map(|i| [f64::from_bits(g.id[i]), g.x[i], g.y[i]])
+            .collect();
+        if comm.any(!outside.is_empty()) {
+            let all = comm.all_gather_f64(&outside);
+            return Err(CouplingError::Left {
+                step: self.step,
+                grain: all[0].to_bits(),
+                position: [all[1], all[2]],
+            });
+        }
+        // The owned set may have changed (migration); the loads are recomputed before use.
+        let owned = self.dem.system.owned();
+        self.load.resize(owned, [0.0; 3]);
+        self.handover.resize(owned, [0.0; 3]);
+        self.refresh_views(comm);
+        Ok(())
+    }
+
+    /// Stage "coupling" after the grains moved: see [`Coupler::remap`]; the hand-over is
+    /// summed on the owners. Collective.
+    pub fn remap<T: Real>(&mut self, fluid: &mut dyn FluidBackend<T>, comm: &dyn Comm) {
+        self.coupler.remap(fluid, &self.views, &self.ids, comm);
+        if self.coupler.scheme() != super::Scheme::Psm {
+            let t = std::time::Instant::now();
+            self.handover = self.reduce(Which::Handover, comm);
+            self.coupler.passes[super::pass::REDUCE] += t.elapsed().as_secs_f64();
+        }
+    }
+}
+
+/// Which per-column sums to reduce.
+#[derive(Clone, Copy)]
+enum Which {
+    Exchange,
+    Handover,
+}

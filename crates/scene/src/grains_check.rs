@@ -1,0 +1,362 @@
+//! Validation of grains-only scenes and their conversion to DEM parameters.
+
+use super::grains::*;
+use super::validate::{positive, validate_checks, Context};
+use super::SceneError;
+use dem::{stable_time_step, ContactModel, DemSetup, Grains, SizeDistribution, Wall};
+use std::path::{Path, PathBuf};
+
+/// A grains scene that passed validation.
+#[derive(Debug, Clone)]
+pub struct ValidGrainScene {
+    /// The parsed scene.
+    pub scene: GrainScene,
+    /// Non-fatal findings.
+    pub warnings: Vec<String>,
+    /// Directory of the scene file.
+    pub base_dir: PathBuf,
+    /// Path of the scene file.
+    pub path: PathBuf,
+}
+
+/// Names of the results a grains scene produces (what checks may refer to).
+pub fn grain_result_names(s: &GrainScene) -> Vec<String> {
+    let mut names = Vec::new();
+    for a in &s.analyses {
+        match a {
+            GrainAnalysis::ColumnCollapse { .. } => {
+                for q in crate::collapse_names::QUANTITIES {
+                    names.push(format!("collapse.{q}"));
+                }
+                names.push("collapse.front_t95".into());
+            }
+        }
+    }
+    names
+}
+
+/// Parse and validate a grains scene.
+pub fn parse_grains(text: &str, path: &Path) -> Result<ValidGrainScene, SceneError> {
+    let scene: GrainScene = toml::from_str(text).map_err(|e| SceneError::Parse {
+        path: path.to_owned(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let ctx = Context {
+        text,
+        path,
+        base_dir: &base_dir,
+    };
+    let warnings = validate(&scene, &ctx)?;
+    Ok(ValidGrainScene {
+        scene,
+        warnings,
+        base_dir,
+        path: path.to_owned(),
+    })
+}
+
+pub(super) fn non_negative(ctx: &Context, key: &str, v: f64) -> Result<(), SceneError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(ctx.err(key, 0, format!("must be a finite number ≥ 0, got {v}")))
+    }
+}
+
+pub(super) fn rectangle(
+    ctx: &Context,
+    key: &str,
+    lo: [f64; 2],
+    hi: [f64; 2],
+) -> Result<(), SceneError> {
+    if lo.iter().chain(&hi).all(|v| v.is_finite()) && lo[0] < hi[0] && lo[1] < hi[1] {
+        Ok(())
+    } else {
+        Err(ctx.err(
+            key,
+            0,
+            format!("the rectangle {lo:?}–{hi:?} is empty: min_m must be below and left of max_m"),
+        ))
+    }
+}
+
+pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
+    let mut warnings = Vec::new();
+    rectangle(ctx, "min_m", s.region.min_m, s.region.max_m)?;
+    let g = &s.grains;
+    positive(ctx, "density_kg_m3", g.density_kg_m3, "the grain density")?;
+    non_negative(ctx, "global_damping_1_s", g.global_damping_1_s)?;
+    let c = &g.contact;
+    positive(ctx, "normal_stiffness_n_m2", c.normal_stiffness_n_m2, "k_n")?;
+    non_negative(
+        ctx,
+        "tangential_stiffness_n_m2",
+        c.tangential_stiffness_n_m2,
+    )?;
+    if !(c.restitution > 0.0 && c.restitution <= 1.0) {
+        return Err(ctx.err(
+            "restitution",
+            0,
+            format!("must be in (0, 1], got {}", c.restitution),
+        ));
+    }
+    non_negative(ctx, "friction", c.friction)?;
+    non_negative(ctx, "rolling_friction", c.rolling_friction)?;
+    if !(0.0..=1.0).contains(&c.tangential_damping) {
+        return Err(ctx.err(
+            "tangential_damping",
+            0,
+            format!(
+                "must be in [0, 1] (a fraction of the normal dashpot), got {}",
+                c.tangential_damping
+            ),
+        ));
+    }
+    match g.time_step {
+        TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => {
+            if !(lambda > 0.0 && lambda <= 1.0) {
+                return Err(ctx.err(
+                    "lambda",
+                    0,
+                    format!("λ must be in (0, 1] (about 0.1, seed eq. 5.60), got {lambda}"),
+                ));
+            }
+        }
+    }
+    if let TimeStepSpec::Fixed { time_step_s, .. } = g.time_step {
+        positive(ctx, "time_step_s", time_step_s, "the time step")?;
+    }
+    match &g.sample {
+        SampleSpec::Pack {
+            min_m,
+            max_m,
+            sizes,
+            solid_fraction,
+            settle,
+            ..
+        } => {
+            rectangle(ctx, "min_m", *min_m, *max_m)?;
+            let dist = size_distribution(sizes);
+            if let Err(e) = dist.validate() {
+                return Err(ctx.err("distribution", 0, e.to_string()));
+            }
+            if !(*solid_fraction > 0.0 && *solid_fraction <= 0.9) {
+                return Err(ctx.err(
+                    "solid_fraction",
+                    0,
+                    format!("must be in (0, 0.9] (random addition jams near 0.55), got {solid_fraction}"),
+                ));
+            }
+            if let Some(st) = settle {
+                positive(ctx, "damping_1_s", st.damping_1_s, "the settling damping")?;
+                positive(
+                    ctx,
+                    "kinetic_energy_per_grain_j_m",
+                    st.kinetic_energy_per_grain_j_m,
+                    "the settling threshold",
+                )?;
+                if st.max_steps == 0 {
+                    return Err(ctx.err("max_steps", 0, "must be at least 1"));
+                }
+                if let Some(f) = st.friction {
+                    if !(f >= 0.0 && f.is_finite()) {
+                        return Err(ctx.err(
+                            "friction",
+                            0,
+                            format!("the settling friction must be 0 or positive, got {f}"),
+                        ));
+                    }
+                }
+            }
+        }
+        SampleSpec::List { grains } => {
+            if grains.is_empty() {
+                return Err(ctx.err("grains", 0, "the list holds no grains: add at least one"));
+            }
+            for (n, l) in grains.iter().enumerate() {
+                positive(ctx, "radius_m", l.radius_m, "a grain radius")?;
+                let inside = |a: usize| {
+                    l.position_m[a] - l.radius_m >= s.region.min_m[a]
+                        && l.position_m[a] + l.radius_m <= s.region.max_m[a]
+                };
+                let finite = l
+                    .position_m
+                    .iter()
+                    .chain(&l.velocity_m_s)
+                    .all(|v| v.is_finite());
+                if !(finite && inside(0) && inside(1)) {
+                    return Err(ctx.err(
+                        "position_m",
+                        n,
+                        format!(
+                            "grain {n} at {:?} with radius {} m is not wholly inside the domain \
+                             [{:?}, {:?}]; move it inside",
+                            l.position_m, l.radius_m, s.region.min_m, s.region.max_m
+                        ),
+                    ));
+                }
+            }
+        }
+        SampleSpec::Csv { file } => {
+            let p = ctx.base_dir.join(file);
+            if !p.is_file() {
+                return Err(ctx.err(
+                    "file",
+                    0,
+                    format!(
+                        "grain file {} not found (paths are relative to the scene)",
+                        p.display()
+                    ),
+                ));
+            }
+        }
+    }
+    for (n, w) in g.walls.iter().enumerate() {
+        if g.walls[..n].iter().any(|o| o.name == w.name) {
+            return Err(ctx.err("name", n, format!("wall name `{}` is used twice", w.name)));
+        }
+        if w.from_m == w.to_m || !w.from_m.iter().chain(&w.to_m).all(|v| v.is_finite()) {
+            return Err(ctx.err("from_m", n, format!("wall `{}` has no length", w.name)));
+        }
+        non_negative(ctx, "friction", w.friction)?;
+        if let Some(t) = w.remove_at_s {
+            non_negative(ctx, "remove_at_s", t)?;
+        }
+    }
+    positive(ctx, "end_time_s", s.run.end_time_s, "the run's end time")?;
+    non_negative(ctx, "output_every_s", s.run.output_every_s)?;
+    non_negative(
+        ctx,
+        "stop_below_kinetic_energy_j_m",
+        s.run.stop_below_kinetic_energy_j_m,
+    )?;
+    if s.analyses.len() > 1 {
+        return Err(ctx.err("kind", 0, "at most one column-collapse analysis per scene"));
+    }
+    if let Some(GrainAnalysis::ColumnCollapse {
+        front_min_height_m: Some(_),
+        ..
+    }) = s.analyses.first()
+    {
+        return Err(ctx.err(
+            "front_min_height_m",
+            0,
+            "the thick front is measured on MPM deposits only (a grain deposit's front is \
+             already grain by grain); remove front_min_height_m",
+        ));
+    }
+    validate_checks(&s.checks, ctx)?;
+    let names = grain_result_names(s);
+    for (n, c) in s.checks.iter().enumerate() {
+        if !names.contains(&c.quantity) {
+            return Err(ctx.err(
+                "quantity",
+                n,
+                format!(
+                    "check on unknown quantity `{}`; this scene produces: {}",
+                    c.quantity,
+                    if names.is_empty() {
+                        "nothing".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            ));
+        }
+    }
+    if s.run.output_every_s == 0.0 {
+        warnings.push("output_every_s = 0: snapshots only at the start and the end".into());
+    }
+    Ok(warnings)
+}
+
+/// The radius distribution of a size spec.
+pub fn size_distribution(s: &SizeSpec) -> SizeDistribution {
+    match *s {
+        SizeSpec::Mono { radius_m } => SizeDistribution::Mono { r: radius_m },
+        SizeSpec::Bidisperse {
+            small_radius_m,
+            large_radius_m,
+            fraction_small,
+        } => SizeDistribution::Bidisperse {
+            small: small_radius_m,
+            large: large_radius_m,
+            fraction_small,
+        },
+        SizeSpec::Uniform {
+            min_radius_m,
+            max_radius_m,
+        } => SizeDistribution::Uniform {
+            min: min_radius_m,
+            max: max_radius_m,
+        },
+        SizeSpec::Normal {
+            mean_radius_m,
+            std_radius_m,
+            min_radius_m,
+            max_radius_m,
+        } => SizeDistribution::Normal {
+            mean: mean_radius_m,
+            std: std_radius_m,
+            min: min_radius_m,
+            max: max_radius_m,
+        },
+    }
+}
+
+impl ValidGrainScene {
+    /// The contact law of the scene.
+    pub fn contact_model(&self) -> ContactModel {
+        let c = &self.scene.grains.contact;
+        ContactModel {
+            kn: c.normal_stiffness_n_m2,
+            kt: c.tangential_stiffness_n_m2,
+            restitution: c.restitution,
+            friction: c.friction,
+            rolling_friction: c.rolling_friction,
+            tangential_damping: c.tangential_damping,
+        }
+    }
+
+    /// λ of the time-step choice: the fraction of Δt_cr the step must respect.
+    pub fn lambda(&self) -> f64 {
+        match self.scene.grains.time_step {
+            TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => lambda,
+        }
+    }
+
+    /// The time step for `grains` (s): the fixed one, or λ Δt_cr of the lightest grain.
+    pub fn time_step(&self, grains: &Grains) -> f64 {
+        match self.scene.grains.time_step {
+            TimeStepSpec::Fixed { time_step_s, .. } => time_step_s,
+            TimeStepSpec::Critical { lambda } => {
+                stable_time_step(grains, &self.contact_model(), lambda)
+            }
+        }
+    }
+
+    /// Walls (at t = 0), contacts, gravity, time step and λ of the scene for `grains`.
+    pub fn dem_setup(&self, grains: &Grains) -> DemSetup {
+        DemSetup {
+            walls: self.walls(),
+            model: self.contact_model(),
+            gravity: self.scene.grains.gravity_m_s2,
+            dt: self.time_step(grains),
+            lambda: self.lambda(),
+        }
+    }
+
+    /// The walls at t = 0, in scene order.
+    pub fn walls(&self) -> Vec<Wall> {
+        self.scene
+            .grains
+            .walls
+            .iter()
+            .map(|w| Wall {
+                velocity: w.velocity_m_s,
+                ..Wall::fixed(w.from_m, w.to_m, w.friction)
+            })
+            .collect()
+    }
+}

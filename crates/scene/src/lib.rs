@@ -1,0 +1,178 @@
+//! Scenes: TOML files in SI units, parsed strictly and validated before anything is
+//! allocated. [`load`] returns a [`ValidScene`]: the parsed scene, its derived lattice
+//! [`Units`] and any warnings.
+
+mod build;
+pub mod collapse_names;
+pub mod coupling;
+mod grains;
+mod grains_check;
+mod mpm;
+mod mpm_check;
+mod mpm_material_check;
+mod probes_check;
+mod schema;
+mod validate;
+
+pub use build::{build_lattice, solid_id_of, BuiltGeometry};
+pub use grains::*;
+pub use grains_check::{grain_result_names, parse_grains, size_distribution, ValidGrainScene};
+pub use lbm::gpu::GpuStorage;
+pub use lbm::units::{derive, TimeStepChoice, Units};
+pub use mpm::*;
+pub use mpm_check::{body_shape, mpm_result_names, parse_mpm, ValidMpmScene};
+pub use schema::*;
+
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a scene was rejected.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        /// Scene path.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax, an unknown key, a missing key or a wrong type (toml's message names the
+    /// key, line and column).
+    #[error("{path}: {message}")]
+    Parse {
+        /// Scene path.
+        path: PathBuf,
+        /// toml's message.
+        message: String,
+    },
+    /// A value that parses but is impossible.
+    #[error("{path}{}: `{key}`: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Invalid {
+        /// Scene path.
+        path: PathBuf,
+        /// 1-based line of the key, when it can be located.
+        line: Option<usize>,
+        /// The offending key.
+        key: String,
+        /// What is wrong and how to fix it.
+        message: String,
+    },
+}
+
+/// A scene that passed validation.
+#[derive(Debug, Clone)]
+pub struct ValidScene {
+    /// The parsed scene.
+    pub scene: Scene,
+    /// Derived lattice parameters.
+    pub units: Units,
+    /// Non-fatal findings (e.g. Mach > 0.1).
+    pub warnings: Vec<String>,
+    /// Directory of the scene file (relative paths in the scene resolve against it).
+    pub base_dir: PathBuf,
+    /// Path of the scene file.
+    pub path: PathBuf,
+}
+
+impl ValidScene {
+    /// An error about `key` of this scene that only shows once the scene is being built
+    /// (no line: the key may stand for a sample or a file).
+    pub fn invalid(&self, key: &str, message: String) -> SceneError {
+        SceneError::Invalid {
+            path: self.path.clone(),
+            line: None,
+            key: key.into(),
+            message,
+        }
+    }
+}
+
+/// Read, parse and validate a scene file.
+pub fn load(path: &Path) -> Result<ValidScene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    parse(&text, path)
+}
+
+/// A validated scene of either kind.
+#[derive(Debug, Clone)]
+pub enum AnyScene {
+    /// Lattice Boltzmann fluid (with obstacles).
+    Fluid(Box<ValidScene>),
+    /// Dry grains (DEM only).
+    Grains(Box<ValidGrainScene>),
+    /// Continuum bodies (MPM only).
+    Mpm(Box<ValidMpmScene>),
+}
+
+/// Read, parse and validate a scene of any kind: a `[grains]` table without `[fluid]` is a
+/// grains scene, an `[mpm]` table alone an MPM scene, `[fluid]` with `[grains]` a coupled
+/// fluid scene, anything else a fluid scene.
+pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let table: toml::Table = toml::from_str(&text).map_err(|e| SceneError::Parse {
+        path: path.to_owned(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    if table.contains_key("mpm") {
+        if let Some(other) = ["fluid", "grains"]
+            .into_iter()
+            .find(|k| table.contains_key(*k))
+        {
+            return Err(SceneError::Invalid {
+                path: path.to_owned(),
+                line: None,
+                key: "mpm".into(),
+                message: format!(
+                    "a scene with both [mpm] and [{other}] needs coupling between them, which \
+                     grainflow does not run yet; split it into separate scenes"
+                ),
+            });
+        }
+        return Ok(AnyScene::Mpm(Box::new(parse_mpm(&text, path)?)));
+    }
+    match (table.contains_key("grains"), table.contains_key("fluid")) {
+        (true, false) => Ok(AnyScene::Grains(Box::new(parse_grains(&text, path)?))),
+        (true, true) => parse(&text, path)
+            .map(|s| AnyScene::Fluid(Box::new(s)))
+            .map_err(|e| match e {
+                SceneError::Parse { path, message } => SceneError::Parse {
+                    path,
+                    message: format!(
+                        "{message}\n(a scene with [fluid] and [grains] runs coupled: it needs \
+                         [domain], [fluid], [boundaries], [run], [grains] and [coupling])"
+                    ),
+                },
+                other => other,
+            }),
+        _ => Ok(AnyScene::Fluid(Box::new(parse(&text, path)?))),
+    }
+}
+
+/// Parse and validate scene text; `path` is used in messages and to resolve relative files.
+pub fn parse(text: &str, path: &Path) -> Result<ValidScene, SceneError> {
+    let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
+        path: path.to_owned(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let ctx = validate::Context {
+        text,
+        path,
+        base_dir: &base_dir,
+    };
+    let (units, warnings) = validate::validate(&scene, &ctx)?;
+    Ok(ValidScene {
+        scene,
+        units,
+        warnings,
+        base_dir,
+        path: path.to_owned(),
+    })
+}
