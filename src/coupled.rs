@@ -13,7 +13,8 @@ use decomposition::{Comm, SlabPartition};
 use dem::{DemSetup, Grains};
 use lbm::lattice::FaceCondition;
 use lbm::{FluidBackend, Real};
-use scene::coupling::{grain_scene, CouplingSpec};
+use scene::coupling::CouplingSpec;
+use scene::coupling_check::grain_scene;
 use scene::{ValidGrainScene, ValidScene};
 
 pub use plan::{plan, CouplingPlan};

@@ -4,7 +4,7 @@
 use crate::error::RunError;
 use coupling::Scheme;
 use dem::{load_csv, Grains};
-use scene::coupling::{grain_scene, radius_range};
+use scene::coupling_check::{grain_scene, radius_range};
 use scene::{SampleSpec, ValidScene};
 
 /// The coupling parameters a scene implies.

@@ -184,7 +184,7 @@ pub(super) fn boundary_of(
     g: usize,
     mut visit: impl FnMut(Entry),
 ) {
-    use super::exchange::neighbour;
+    use super::map::neighbour;
     let grain = &views[g];
     let reach = grain.radius + 1.0;
     // Boxes of earlier images (global x, y ranges), where the lattice is so small that
@@ -326,8 +326,8 @@ mod tests {
                     let k = e.cell as usize;
                     for i in 1..Q {
                         let bit = 1u8 << (i - 1);
-                        let behind = owner[crate::exchange::neighbour(&f, k, i, -1)];
-                        let ahead = crate::exchange::neighbour(&f, k, i, 1);
+                        let behind = owner[crate::map::neighbour(&f, k, i, -1)];
+                        let ahead = crate::map::neighbour(&f, k, i, 1);
                         assert_eq!(e.links & bit != 0, behind != NONE);
                         assert_eq!(e.foreign & bit != 0, behind != NONE && behind != g);
                         assert_eq!(e.plain & bit != 0, owner[ahead] == NONE && fluid(ahead));

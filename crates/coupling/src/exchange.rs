@@ -92,7 +92,7 @@ pub struct Coupler {
     /// Each grain's boundary cells, kept between remaps (`boundary_lists.rs`).
     pub(super) lists: super::boundary_lists::BoundaryLists,
     /// Solid fractions (partially saturated method) by row, each row sorted by cell.
-    pub(super) share_rows: Vec<super::psm::ShareRow>,
+    pub(super) share_rows: Vec<super::map::ShareRow>,
     /// The grain images that reach the slab (grain, image centre), with the line tables of
     /// their exact cell areas (`geometry::CellAreas`: image i's vertical lines are
     /// `column_lines[column_start[i]..column_start[i + 1]]`, its horizontal lines likewise).
@@ -407,11 +407,4 @@ impl Coupler {
 pub(super) fn rigid_velocity(f: &SlabFrame, g: &GrainView, p: [f64; 2]) -> [f64; 2] {
     let c = super::map::nearest_image(f, g, p);
     GrainView { centre: c, ..*g }.surface_velocity(p)
-}
-
-/// Padded index of the neighbour of `k` at `sign · c_i`.
-#[inline]
-pub(super) fn neighbour(f: &SlabFrame, k: usize, i: usize, sign: i64) -> usize {
-    use lbm::d2q9::{CX, CY};
-    (k as i64 + sign * (CX[i] as i64 + CY[i] as i64 * f.stride as i64)) as usize
 }

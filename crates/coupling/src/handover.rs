@@ -4,7 +4,8 @@
 //! momentum balance.
 
 use super::cover_update::Change;
-use super::exchange::{neighbour, rigid_velocity, Coupler};
+use super::exchange::{rigid_velocity, Coupler};
+use super::map::neighbour;
 use super::map::{cover, nearest_image, set_cells, GrainView, NONE};
 use super::{Refill, Scheme};
 use decomposition::Comm;

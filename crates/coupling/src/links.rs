@@ -1,7 +1,8 @@
 //! Bounce-back schemes: the fluid cells next to a grain (its *boundary*), the plan of their
 //! links to it, and the loads they hand to each grain.
 
-use super::exchange::{neighbour, Coupler};
+use super::exchange::Coupler;
+use super::map::neighbour;
 use super::gather::Shared;
 use super::geometry::link_fraction;
 use super::map::{nearest_image_at, GrainView};

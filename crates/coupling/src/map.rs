@@ -333,6 +333,23 @@ pub fn share_rows(frame: &SlabFrame, c: [f64; 2], r: f64) -> (i64, i64) {
     )
 }
 
+/// One row's partially saturated shares, kept from the map to the plan (and read by
+/// `Coupler::solid_fraction` in between).
+#[derive(Debug, Clone, Default)]
+pub struct ShareRow {
+    /// The row's shares, sorted by cell, a cell's shares in grain order.
+    pub(super) shares: Vec<Share>,
+    /// How many distinct cells they cover.
+    pub(super) cells: u32,
+}
+
+/// Padded index of the neighbour of `k` at `sign · c_i`.
+#[inline]
+pub(super) fn neighbour(f: &SlabFrame, k: usize, i: usize, sign: i64) -> usize {
+    use lbm::d2q9::{CX, CY};
+    (k as i64 + sign * (CX[i] as i64 + CY[i] as i64 * f.stride as i64)) as usize
+}
+
 #[cfg(test)]
 mod tests {
     use crate::test_slabs::{next, slab};

@@ -7,22 +7,12 @@ use super::gather::{group_by_row, row_of, Shared};
 use super::geometry::{
     box_lines, column_line, row_line, CellAreas, ColumnLine, RowLine, TABLE_PAD,
 };
-use super::map::{share_rows, GrainView, Share};
+use super::map::{share_rows, GrainView, Share, ShareRow};
 use super::row_walk::shares_in_row;
 use lbm::moving::{SolidShare, NO_SLOT};
 use lbm::{Lattice, Real};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// One row's partially saturated shares, kept from the map to the plan (and read by
-/// [`Coupler::solid_fraction`] in between).
-#[derive(Debug, Clone, Default)]
-pub struct ShareRow {
-    /// The row's shares, sorted by cell, a cell's shares in grain order.
-    pub(super) shares: Vec<Share>,
-    /// How many distinct cells they cover.
-    pub(super) cells: u32,
-}
 
 impl Coupler {
     /// The solid fraction of every interior fluid cell each grain overlaps, row by row

@@ -11,6 +11,8 @@
 //! - [`system`]: the time step (USF, USL, MUSL) as timed stages.
 //! - [`generate`]: filling rectangles and polygons with n × n points per cell.
 
+pub mod balance;
+pub mod error;
 pub mod generate;
 pub mod grid;
 pub mod inertial;

@@ -9,17 +9,12 @@
 //! the same order on both ranks — and as on one rank. Results are therefore bit-identical
 //! on any number of ranks.
 
-use super::points::{Points, PACKED};
-use super::system::{MpmError, MpmSystem};
+use super::points::PACKED;
+pub use super::balance::{balanced_columns, column_counts, MIN_COLUMNS, REBALANCE_EVERY};
+use super::error::MpmError;
+use super::system::MpmSystem;
 use super::transfer::{Strip, Q};
 use decomposition::{swap_neighbours_varlen, Comm};
-
-/// Fewest cell columns in a slab: the strips a node needs come from at most three columns
-/// on either side, which must belong to the adjacent rank.
-pub const MIN_COLUMNS: usize = 3;
-
-/// Steps between checks of the load balance.
-pub const REBALANCE_EVERY: u64 = 200;
 
 const TAG_STRIP: (u16, u16) = (300, 310);
 const TAG_MIGRATE: (u16, u16) = (320, 330);
@@ -36,48 +31,6 @@ pub struct Totals {
     pub kinetic_energy: f64,
     /// Momentum (kg/s per metre).
     pub momentum: [f64; 2],
-}
-
-/// Points per cell column (every point must lie in the grid).
-pub fn column_counts(points: &Points, spec: &super::GridSpec) -> Result<Vec<f64>, MpmError> {
-    let mut counts = vec![0.0; spec.nx];
-    for (i, p) in points.pos.iter().enumerate() {
-        let c = (p[0] / spec.h).floor();
-        if !(c >= 0.0 && c < spec.nx as f64 && p[1] >= 0.0 && p[1] < spec.height()) {
-            return Err(MpmError::LeftDomain {
-                step: 0,
-                id: points.id[i],
-                x: p[0],
-                y: p[1],
-            });
-        }
-        counts[c as usize] += 1.0;
-    }
-    Ok(counts)
-}
-
-/// Slab boundaries (cell columns, length `ranks + 1`) that split `counts` into contiguous
-/// slabs of nearly equal totals, each at least [`MIN_COLUMNS`] wide.
-pub fn balanced_columns(counts: &[f64], ranks: usize, nx: usize) -> Result<Vec<usize>, MpmError> {
-    if nx < MIN_COLUMNS * ranks {
-        return Err(MpmError::TooManyRanks { ranks, columns: nx });
-    }
-    let total: f64 = counts.iter().sum();
-    let mut bounds = vec![0usize; ranks + 1];
-    bounds[ranks] = nx;
-    let mut acc = 0.0;
-    let mut c = 0;
-    for r in 1..ranks {
-        let target = total * r as f64 / ranks as f64;
-        let lo = bounds[r - 1] + MIN_COLUMNS;
-        let hi = nx - MIN_COLUMNS * (ranks - r);
-        while c < lo || (c < hi && acc + counts[c] * 0.5 < target) {
-            acc += counts[c];
-            c += 1;
-        }
-        bounds[r] = c;
-    }
-    Ok(bounds)
 }
 
 impl MpmSystem {

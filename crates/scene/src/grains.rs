@@ -2,7 +2,7 @@
 //! same strictness as fluid scenes: unknown keys are errors, variants are tagged, SI units
 //! are in the names.
 
-use super::schema::Check;
+use super::check::Check;
 use serde::{Deserialize, Serialize};
 
 /// A grains-only scene.

@@ -3,8 +3,11 @@
 //! [`Units`] and any warnings.
 
 mod build;
+mod check;
 pub mod collapse_names;
+mod context;
 pub mod coupling;
+pub mod coupling_check;
 mod grains;
 mod grains_check;
 mod mpm;
@@ -162,7 +165,7 @@ pub fn parse(text: &str, path: &Path) -> Result<ValidScene, SceneError> {
         message: e.to_string().trim_end().to_string(),
     })?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let ctx = validate::Context {
+    let ctx = context::Context {
         text,
         path,
         base_dir: &base_dir,

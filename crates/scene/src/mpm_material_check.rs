@@ -2,7 +2,7 @@
 
 use super::grains_check::non_negative;
 use super::mpm::*;
-use super::validate::{positive, Context};
+use super::context::{positive, Context};
 use super::SceneError;
 use mpm::mohr_coulomb::Softening;
 use mpm::{InertialFriction, Material, Model, MohrCoulomb};

@@ -2,7 +2,7 @@
 //! possible, with the key, its line and the fix in the error.
 
 use super::schema::*;
-use super::validate::{positive, validate_checks, Context};
+use super::context::{positive, validate_checks, Context};
 use super::SceneError;
 
 /// Probes (unique names, inside the domain, naming what exists) and analyses (each with the

@@ -1,6 +1,7 @@
 //! The scene file schema (TOML). Every table rejects unknown keys; variants are tagged by
 //! `kind`, `shape` or `model`; SI units are in the field names.
 
+pub use super::check::Check;
 use lbm::gpu::GpuStorage;
 use serde::{Deserialize, Serialize};
 
@@ -554,28 +555,4 @@ pub enum Analysis {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         pore_pressure: Option<String>,
     },
-}
-
-/// A pass/fail check on a named quantity. Give `max`, `min`, or `expected` with
-/// `tolerance` (absolute) or `relative_tolerance`.
-#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct Check {
-    /// Quantity name, e.g. `poiseuille.max_rel_error`.
-    pub quantity: String,
-    /// Reference value.
-    #[serde(default)]
-    pub expected: Option<f64>,
-    /// Allowed absolute deviation from `expected`.
-    #[serde(default)]
-    pub tolerance: Option<f64>,
-    /// Allowed relative deviation from `expected`.
-    #[serde(default)]
-    pub relative_tolerance: Option<f64>,
-    /// Upper bound.
-    #[serde(default)]
-    pub max: Option<f64>,
-    /// Lower bound.
-    #[serde(default)]
-    pub min: Option<f64>,
 }

@@ -2,59 +2,9 @@
 //! key, its line and the fix.
 
 use super::schema::*;
+use super::context::{positive, Context};
 use super::SceneError;
 use lbm::units::{derive, TimeStepChoice, Units};
-use std::path::Path;
-
-/// Where the scene came from, for messages.
-pub(crate) struct Context<'a> {
-    pub text: &'a str,
-    pub path: &'a Path,
-    pub base_dir: &'a Path,
-}
-
-impl Context<'_> {
-    /// 1-based line of the `nth` occurrence (0-based) of `key = …` in the text.
-    fn line_of(&self, key: &str, nth: usize) -> Option<usize> {
-        let mut seen = 0;
-        for (i, line) in self.text.lines().enumerate() {
-            let code = line.split('#').next().unwrap_or("");
-            let mut rest = code;
-            while let Some(pos) = rest.find(key) {
-                let before = rest[..pos].chars().last();
-                let after = rest[pos + key.len()..].trim_start();
-                let word_start = before.is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
-                if word_start && after.starts_with('=') {
-                    if seen == nth {
-                        return Some(i + 1);
-                    }
-                    seen += 1;
-                    break;
-                }
-                rest = &rest[pos + key.len()..];
-            }
-        }
-        None
-    }
-
-    /// An `Invalid` error for the `nth` occurrence of `key`.
-    pub(crate) fn err(&self, key: &str, nth: usize, message: impl Into<String>) -> SceneError {
-        SceneError::Invalid {
-            path: self.path.to_owned(),
-            line: self.line_of(key, nth),
-            key: key.to_owned(),
-            message: message.into(),
-        }
-    }
-}
-
-pub(crate) fn positive(ctx: &Context, key: &str, v: f64, what: &str) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(ctx.err(key, 0, format!("{what} must be a positive number, got {v}")))
-    }
-}
 
 /// Validate and derive units. Returns the warnings.
 pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>), SceneError> {
@@ -200,7 +150,7 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
         .end_time_s
         .unwrap_or(s.run.steps.unwrap_or(0) as f64 * units.dt_s);
     super::probes_check::validate_probes_and_analyses(s, ctx, run_end_s)?;
-    warnings.extend(super::coupling::validate(s, &units, ctx)?);
+    warnings.extend(super::coupling_check::validate(s, &units, ctx)?);
     Ok((units, warnings))
 }
 
@@ -387,26 +337,3 @@ fn validate_run(s: &Scene, ctx: &Context, units: &Units) -> Result<(), SceneErro
     Ok(())
 }
 
-/// Each check gives expected with one tolerance, or max and/or min.
-pub(crate) fn validate_checks(checks: &[Check], ctx: &Context) -> Result<(), SceneError> {
-    for (n, c) in checks.iter().enumerate() {
-        let forms = [c.expected.is_some(), c.max.is_some() || c.min.is_some()];
-        let tol = c.tolerance.is_some() as u8 + c.relative_tolerance.is_some() as u8;
-        let ok = match forms {
-            [true, false] => tol == 1,
-            [false, true] => tol == 0,
-            _ => false,
-        };
-        if !ok {
-            return Err(ctx.err(
-                "quantity",
-                n,
-                format!(
-                    "check on `{}` must give either expected with one of tolerance/relative_tolerance, or max and/or min",
-                    c.quantity
-                ),
-            ));
-        }
-    }
-    Ok(())
-}

@@ -3,7 +3,7 @@
 //! their arithmetic is the CPU backend's, to the bit.
 
 use super::fluid::GpuFluid;
-use super::moving::Kernel;
+use super::fluid::moving::Kernel;
 use crate::d2q9::Q;
 use crate::moving::{equilibrium_at, momentum_of, refill_cell, refill_sources, Refill};
 use crate::Real;

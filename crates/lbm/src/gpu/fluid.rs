@@ -17,6 +17,7 @@ use decomposition::{Comm, Side};
 use std::sync::Arc;
 
 mod halo;
+pub(in crate::gpu) mod moving;
 mod setup;
 mod transfer;
 
@@ -97,7 +98,7 @@ pub struct GpuFluid<T: Real> {
     /// Steps recorded but not yet submitted.
     pending: Option<wgpu::CommandEncoder>,
     /// Kernels of moving surfaces (grains), made on first use.
-    pub(super) moving: Option<super::moving::MovingDevice>,
+    pub(super) moving: Option<moving::MovingDevice>,
     /// The moving kernels' index upload of the last step (kept for its allocation).
     pub(super) moving_idx: Vec<u32>,
     /// The moving kernels' real upload of the last step (kept for its allocation).

@@ -7,7 +7,6 @@ pub mod buffers;
 mod cells;
 pub mod context;
 pub mod fluid;
-mod moving;
 
 use serde::{Deserialize, Serialize};
 

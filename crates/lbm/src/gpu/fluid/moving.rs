@@ -6,9 +6,9 @@
 //! sums. Rest fills, refills and cell momenta move whole cells between host and device
 //! (`cells.rs`).
 
-use super::body_columns::{append_bodies, read_sums};
-use super::buffers::{job_groups, round16, shader_source};
-use super::fluid::GpuFluid;
+use super::super::body_columns::{append_bodies, read_sums};
+use super::super::buffers::{job_groups, round16, shader_source};
+use super::{extend_from_bytes, from_bytes, to_bytes, GpuFluid};
 use crate::moving::PsmPlan;
 use crate::moving::{BodyColumns, MovingCells, RigidMotion};
 use crate::Real;
@@ -29,7 +29,7 @@ pub(crate) struct MovingDevice {
 
 /// Which moving kernel to run.
 #[derive(Clone, Copy)]
-pub(super) enum Kernel {
+pub(in crate::gpu) enum Kernel {
     Links,
     Psm,
     BodyLinks,
@@ -61,8 +61,8 @@ impl<T: Real> GpuFluid<T> {
                 entries: &[storage(0, true), storage(1, false)],
             });
             let source = shader_source(T::NAME, self.stored_name(), self.split)
-                + include_str!("shaders/moving.wgsl")
-                + include_str!("shaders/body_columns.wgsl");
+                + include_str!("../shaders/moving.wgsl")
+                + include_str!("../shaders/body_columns.wgsl");
             let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("grainflow moving surfaces"),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -108,7 +108,7 @@ impl<T: Real> GpuFluid<T> {
     /// real data `real` (uploaded first; the real buffer holds `scratch` more reals that
     /// the kernels write), the lattice bound as group `g`; submitted at once. Read the
     /// results back from the real buffer ([`GpuFluid::moving_real_buffer`]).
-    pub(super) fn run_moving(
+    pub(in crate::gpu) fn run_moving(
         &mut self,
         kernels: &[(Kernel, usize)],
         g: usize,
@@ -165,7 +165,7 @@ impl<T: Real> GpuFluid<T> {
         ctx.queue.write_buffer(ibuf, 0, bytemuck::cast_slice(idx));
         if !real.is_empty() {
             ctx.queue
-                .write_buffer(rbuf, 0, &super::fluid::to_bytes(real));
+                .write_buffer(rbuf, 0, &to_bytes(real));
         }
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         for &(kernel, threads) in kernels.iter().filter(|k| k.1 > 0) {
@@ -200,13 +200,13 @@ impl<T: Real> GpuFluid<T> {
     }
 
     /// `count` reals of the moving real buffer from `first`.
-    pub(super) fn moving_reals(&self, first: usize, count: usize) -> Vec<T> {
+    pub(in crate::gpu) fn moving_reals(&self, first: usize, count: usize) -> Vec<T> {
         let bytes = self.download(
             self.moving_real_buffer(),
             first * T::BYTES,
             count * T::BYTES,
         );
-        super::fluid::from_bytes(&bytes)
+        from_bytes(&bytes)
     }
 
     /// `count` reals of the moving real buffer from `first`, into `values` (cleared first),
@@ -241,12 +241,12 @@ impl<T: Real> GpuFluid<T> {
                 .read_append(&self.readback, (at + 4) as u64, &mut data)
                 .unwrap_or_else(|e| panic!("{e}: the GPU device was lost"));
             let flag = u32::from_le_bytes(data[at..at + 4].try_into().expect("4 bytes"));
-            super::fluid::extend_from_bytes(&data[..bytes], values);
+            extend_from_bytes(&data[..bytes], values);
             self.read_bytes = data;
             flag
         } else {
             let data = self.download(rbuf, first * T::BYTES, bytes);
-            super::fluid::extend_from_bytes(&data, values);
+            extend_from_bytes(&data, values);
             let v = self.download(&self.bad_buf, 12, 4);
             u32::from_le_bytes(v[0..4].try_into().expect("4 bytes"))
         };

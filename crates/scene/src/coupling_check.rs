@@ -1,0 +1,179 @@
+//! Validation of `[grains]` + `[coupling]` in a fluid scene, and the grains part of a
+//! coupled scene seen as a grains scene.
+
+use super::context::Context;
+use super::coupling::{MIN_CELLS_PER_DIAMETER, WARN_CELLS_PER_DIAMETER};
+use super::grains::{GrainRun, GrainScene, GrainsSpec, Region, SampleSpec};
+use super::grains_check::{size_distribution, ValidGrainScene};
+use super::schema::{BoundarySpec, Scene};
+use super::{SceneError, Units};
+
+/// The grains part of a coupled scene as a grains scene over the fluid domain (so the
+/// DEM's own validation and sample preparation apply unchanged).
+pub fn grain_scene(
+    scene: &Scene,
+    spec: &GrainsSpec,
+    base_dir: &std::path::Path,
+    path: &std::path::Path,
+) -> ValidGrainScene {
+    let d = &scene.domain;
+    ValidGrainScene {
+        scene: GrainScene {
+            title: scene.title.clone(),
+            region: Region {
+                min_m: [0.0, 0.0],
+                max_m: [
+                    d.cells[0] as f64 * d.spacing_m,
+                    d.cells[1] as f64 * d.spacing_m,
+                ],
+            },
+            grains: spec.clone(),
+            run: GrainRun {
+                end_time_s: 1.0,
+                output_every_s: 0.0,
+                pictures: false,
+                stop_below_kinetic_energy_j_m: 0.0,
+                checkpoint_every: 0,
+                checkpoint_at_end: false,
+            },
+            analyses: Vec::new(),
+            checks: Vec::new(),
+        },
+        warnings: Vec::new(),
+        base_dir: base_dir.to_owned(),
+        path: path.to_owned(),
+    }
+}
+
+/// Radius range (m) of a sample, when the scene alone says it (not for CSV files).
+pub fn radius_range(sample: &SampleSpec) -> Option<(f64, f64)> {
+    match sample {
+        SampleSpec::Pack { sizes, .. } => {
+            let d = size_distribution(sizes);
+            Some((d.min_radius(), d.max_radius()))
+        }
+        SampleSpec::List { grains } => Some(grains.iter().fold((f64::INFINITY, 0.0), |a, g| {
+            (a.0.min(g.radius_m), a.1.max(g.radius_m))
+        })),
+        SampleSpec::Csv { .. } => None,
+    }
+}
+
+/// Validate `[grains]` + `[coupling]` of a fluid scene. Returns warnings.
+pub(super) fn validate(
+    scene: &Scene,
+    units: &Units,
+    ctx: &Context,
+) -> Result<Vec<String>, SceneError> {
+    let mut warnings = Vec::new();
+    let (spec, coupling) =
+        match (&scene.grains, &scene.coupling) {
+            (None, None) => return Ok(warnings),
+            (Some(_), None) => {
+                return Err(ctx.err(
+                    "grains",
+                    0,
+                    "a scene with [fluid] and [grains] runs coupled: add a [coupling] table with \
+                 scheme = \"bounce-back\", \"interpolated\" or \"psm\"",
+                ))
+            }
+            (None, Some(_)) => return Err(ctx.err(
+                "coupling",
+                0,
+                "[coupling] needs grains to couple: add a [grains] table, or remove [coupling] \
+                 for a fluid-only run",
+            )),
+            (Some(g), Some(c)) => (g, c),
+        };
+    let rho_f = scene.fluid.density_kg_m3;
+    if !(spec.density_kg_m3 > rho_f) {
+        return Err(ctx.err(
+            "density_kg_m3",
+            1,
+            format!(
+                "the grain density ({} kg/m³) must exceed the fluid's ({rho_f} kg/m³): \
+                 neutrally buoyant and light grains are not supported",
+                spec.density_kg_m3
+            ),
+        ));
+    }
+    let gs = grain_scene(scene, spec, ctx.base_dir, ctx.path);
+    warnings.extend(super::grains_check::validate(&gs.scene, ctx)?);
+    warnings.retain(|w| !w.contains("output_every_s"));
+    if let SampleSpec::Pack { min_m, max_m, .. } = &spec.sample {
+        let hi = gs.scene.region.max_m;
+        if min_m[0] < 0.0 || min_m[1] < 0.0 || max_m[0] > hi[0] || max_m[1] > hi[1] {
+            return Err(ctx.err(
+                "min_m",
+                0,
+                format!(
+                    "the packing rectangle {min_m:?}–{max_m:?} reaches outside the fluid \
+                     domain [0, 0]–{hi:?}; move it inside"
+                ),
+            ));
+        }
+    }
+    if let Some((rmin, _)) = radius_range(&spec.sample) {
+        let cells = 2.0 * rmin / units.dx_m;
+        if cells < MIN_CELLS_PER_DIAMETER {
+            return Err(ctx.err(
+                "sample",
+                0,
+                format!(
+                    "the smallest grain is {cells:.2} cells across; the coupling needs at least \
+                     {MIN_CELLS_PER_DIAMETER}: refine the lattice (spacing_m) or use larger grains"
+                ),
+            ));
+        }
+        if cells < WARN_CELLS_PER_DIAMETER {
+            warnings.push(format!(
+                "the smallest grain is {cells:.1} cells across (below {WARN_CELLS_PER_DIAMETER}): \
+                 its drag is under-resolved"
+            ));
+        }
+    }
+    if coupling.substeps == Some(0) {
+        return Err(ctx.err(
+            "substeps",
+            0,
+            "must be at least 1 DEM sub-step per fluid step",
+        ));
+    }
+    if let Some(r) = &coupling.repulsion {
+        if !(r.range_m > 0.0 && r.range_m.is_finite()) {
+            return Err(ctx.err(
+                "range_m",
+                0,
+                format!("must be a positive length, got {}", r.range_m),
+            ));
+        }
+        if !(r.strength > 0.0 && r.strength.is_finite()) {
+            return Err(ctx.err(
+                "strength",
+                0,
+                format!("must be positive, got {}", r.strength),
+            ));
+        }
+    }
+    if !scene.obstacles.is_empty() {
+        warnings.push(
+            "grains do not collide with obstacles (only with [[grains.walls]] and the fluid's \
+             wall faces): keep them apart"
+                .into(),
+        );
+    }
+    let b = &scene.boundaries;
+    if [&b.west, &b.east, &b.south, &b.north].iter().any(|f| {
+        matches!(
+            f,
+            BoundarySpec::Velocity { .. } | BoundarySpec::Pressure { .. } | BoundarySpec::Outflow
+        )
+    }) {
+        warnings.push(
+            "grains must stay at least two cells away from open (velocity, pressure, outflow) \
+             faces; a grain that reaches the domain's edge stops the run"
+                .into(),
+        );
+    }
+    Ok(warnings)
+}
