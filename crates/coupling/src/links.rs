@@ -2,9 +2,9 @@
 //! links to it, and the loads they hand to each grain.
 
 use super::exchange::Coupler;
-use super::map::neighbour;
 use super::gather::Shared;
 use super::geometry::link_fraction;
+use super::map::neighbour;
 use super::map::{nearest_image_at, GrainView};
 use super::Scheme;
 use lbm::d2q9::{CX, CY};

@@ -113,6 +113,24 @@ impl<T> DerefMut for AlignedBuf<T> {
     }
 }
 
+/// A raw pointer shared by rayon tasks that write disjoint elements.
+#[derive(Clone, Copy)]
+pub(crate) struct Disjoint<T>(pub(crate) *mut T);
+// SAFETY: every task writes elements no other task touches (see each use).
+unsafe impl<T> Send for Disjoint<T> {}
+unsafe impl<T> Sync for Disjoint<T> {}
+
+impl<T> Disjoint<T> {
+    /// Write `v` at `i`.
+    ///
+    /// # Safety
+    /// `i` is in bounds and no other task reads or writes it during the parallel pass.
+    #[inline(always)]
+    pub(crate) unsafe fn write(&self, i: usize, v: T) {
+        *self.0.add(i) = v;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

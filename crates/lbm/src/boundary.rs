@@ -2,6 +2,7 @@
 //! reconstruction of special cells (half-way bounce-back with Ladd's moving-wall term,
 //! Zou–He velocity and pressure faces and corners).
 
+use super::cells::is_plain;
 use super::d2q9::{rotate, CX, CY, MIRROR_X, MIRROR_Y, OPP, Q, W};
 use super::lattice::{
     Face, FaceCondition, Lattice, Layout, FLUID, MAX_SOLID, OPEN_CORNER, OPEN_WEST,
@@ -360,3 +361,16 @@ impl<T: Real> Lattice<T> {
 }
 
 const IDENTITY: [usize; Q] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
+
+/// Pre-collision populations of interior fluid cell `k` (padded) pulled from `src` (read
+/// through `acc`): a plain pull where every neighbour is plain fluid, the lattice's own wall
+/// and open-face rules otherwise.
+#[inline(always)]
+pub(crate) fn pull<T: Real>(lat: &Lattice<T>, src: Src<T>, acc: Access, k: usize) -> [T; Q] {
+    if is_plain(&lat.types, lat.stride, k) {
+        std::array::from_fn(|i| src.get(acc.pulled(i, k)))
+    } else {
+        let (x, y) = (k % lat.stride - 1, k / lat.stride - 1);
+        lat.gather_special(src, acc, x, y, None)
+    }
+}

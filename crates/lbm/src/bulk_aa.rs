@@ -11,8 +11,7 @@ use super::partial::PartialSweep;
 use super::real::Real;
 use std::ops::Range;
 
-/// Cells the bulk row kernels compute together.
-pub(crate) const BULK_LANES: usize = 8;
+pub(crate) use super::lanes::BULK_LANES;
 
 /// A bulk row kernel: `(collider, buffer, access, first cell, cells)`, as [`bulk_run_aa`].
 pub(crate) type BulkFn<T, C> = unsafe fn(&C, *mut T, Access, usize, usize) -> bool;

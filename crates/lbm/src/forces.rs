@@ -2,7 +2,7 @@
 //! global order (column by column, south to north within a column), so the total has the
 //! same bits on any number of ranks and threads.
 
-use super::lattice::RowPlan;
+use super::rows::RowPlan;
 use decomposition::Comm;
 
 /// Per-cell force slots of one slab: each special or edge cell has one `[fx, fy]` per solid.

@@ -22,10 +22,11 @@ use super::d2q9::{CX, CY, MIRROR_X, MIRROR_Y, OPP, Q};
 use super::lattice::{Face, FaceCondition, Lattice, Layout, StepError, FLUID, HALO_DIRS};
 use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
+use super::rows::{block_tasks, DrainPlan};
 use super::wall_runs::sweep_wall_run;
 use decomposition::{Comm, Side};
 use rayon::prelude::*;
-use std::ops::Range;
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Populations that leave through the west face (c_x = −1) and the east face (c_x = +1).
@@ -33,16 +34,6 @@ const WESTWARD: [usize; HALO_DIRS] = [3, 6, 7];
 const EASTWARD: [usize; HALO_DIRS] = [1, 5, 8];
 /// "No slot": the halo value is zero (faces whose halo the two-array kernel leaves empty).
 pub(crate) const NONE: usize = usize::MAX;
-
-/// What [`Lattice::drain`] copies after every push step: the indices are fixed by the
-/// geometry, so they are found once (the first drain) and the step only gathers.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct DrainPlan {
-    /// Per x side (left, right): the slot each value sent to that neighbour comes from.
-    send: [Vec<usize>; 2],
-    /// (slot a fluid cell pulls, slot its value comes from).
-    fill: Vec<(usize, usize)>,
-}
 
 /// A pointer into the one buffer that row tasks share (each touches only its cells' slots).
 #[derive(Clone, Copy)]
@@ -531,55 +522,9 @@ impl<T: Real> Lattice<T> {
     }
 }
 
-/// The tasks of a sweep by blocks of `h` rows that sums loads per body (see
-/// `partial::ShareSums`), into `tasks`: within each block, the rows from its first to its
-/// last row that holds partially saturated cells (`planned(y)`) are one task, to be swept in
-/// increasing order (every body summed in the sweep lies there); the other rows go in bands
-/// of [`PLAIN_BAND`] rows. The blocks come first, the most rows first, then the bands, so
-/// that a pool that takes them in order ends the sweep on short tasks (the cost of a sweep
-/// by blocks sits where the grains are).
-fn block_tasks(
-    tasks: &mut Vec<Range<usize>>,
-    ny: usize,
-    h: usize,
-    planned: impl Fn(usize) -> bool,
-) {
-    tasks.clear();
-    for b0 in (0..ny).step_by(h.max(1)) {
-        let b1 = (b0 + h).min(ny);
-        // The block's planned rows, first to last (none: the block ends them).
-        let (a, e) = match (b0..b1).find(|&y| planned(y)) {
-            Some(first) => {
-                let last = (first..b1).rev().find(|&y| planned(y)).expect("first is");
-                (first, last + 1)
-            }
-            None => (b1, b1),
-        };
-        if a < e {
-            tasks.push(a..e);
-        }
-        for (from, to) in [(b0, a), (e, b1)] {
-            tasks.extend(
-                (from..to)
-                    .step_by(PLAIN_BAND)
-                    .map(|y| y..(y + PLAIN_BAND).min(to)),
-            );
-        }
-    }
-    // The blocks (each starts on a planned row) first, longest first; then the bands, in
-    // row order (the sort is stable).
-    tasks.sort_by_key(|r| {
-        let block = planned(r.start);
-        (!block, std::cmp::Reverse(if block { r.len() } else { 0 }))
-    });
-}
-
-/// Rows per task of the plain rows of a sweep by blocks ([`block_tasks`]).
-const PLAIN_BAND: usize = 16;
-
 #[cfg(test)]
 mod tests {
-    use super::{block_tasks, PLAIN_BAND};
+    use crate::rows::{block_tasks, PLAIN_BAND};
 
     /// The tasks cover every row once; each block's rows that hold plan cells are one task
     /// (in order), the blocks come first, longest first, and the rest go in short bands.

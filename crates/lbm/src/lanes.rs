@@ -133,6 +133,9 @@ impl<T: Real, const N: usize> Simd for Lanes<T, N> {
     }
 }
 
+/// Cells the bulk row kernels compute together.
+pub(crate) const BULK_LANES: usize = 8;
+
 /// Whether this CPU runs the AVX-512 builds of the bulk row kernels (AVX-512F and VL: 32
 /// vector registers, so the collision's temporaries stay in registers). Detected once by
 /// the standard library and cached.

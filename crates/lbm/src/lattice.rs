@@ -1,92 +1,18 @@
-//! Lattice storage, cell types and the per-row execution plan.
+//! Lattice storage: the populations of a slab, its cell types and its row plans.
 
 use super::aligned::AlignedBuf;
+pub(crate) use super::cells::{is_plain, HALO_DIRS};
+pub use super::cells::{
+    Face, FaceCondition, FLUID, MAX_SOLID, OPEN_CORNER, OPEN_EAST, OPEN_NORTH, OPEN_SOUTH,
+    OPEN_WEST,
+};
 use super::collision::{equilibrium, Collision, CollisionParams, Moments};
-use super::d2q9::{CX, CY, Q};
+use super::d2q9::Q;
 use super::forces::ForceSlots;
 use super::real::Real;
+use super::rows::{row_plan, DrainPlan, RowPlan};
 use decomposition::{Side, SlabHalo, SlabPartition};
 use thiserror::Error;
-
-/// Cell type code for fluid (including halo cells filled by copies: periodic, free-slip, outflow).
-pub const FLUID: u16 = 0;
-/// First type code of the open-boundary halo cells (west, east, south, north, corner).
-pub const OPEN_WEST: u16 = 0xFFF0;
-/// Open east halo.
-pub const OPEN_EAST: u16 = 0xFFF1;
-/// Open south halo.
-pub const OPEN_SOUTH: u16 = 0xFFF2;
-/// Open north halo.
-pub const OPEN_NORTH: u16 = 0xFFF3;
-/// Halo corner between two open faces.
-pub const OPEN_CORNER: u16 = 0xFFF4;
-/// Largest solid id (solid ids are `1..=MAX_SOLID`).
-pub const MAX_SOLID: u16 = 0xFFEF;
-
-/// The four faces of the lattice, in the order boundary arrays use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Face {
-    /// x = 0.
-    West = 0,
-    /// x = nx − 1.
-    East = 1,
-    /// y = 0.
-    South = 2,
-    /// y = ny − 1.
-    North = 3,
-}
-
-impl Face {
-    /// All faces.
-    pub const ALL: [Face; 4] = [Face::West, Face::East, Face::South, Face::North];
-    /// Quarter turns that map the west-face frame onto this face (inward normals: W +x, S +y, E −x, N −y).
-    pub fn quarter_turns(self) -> usize {
-        match self {
-            Face::West => 0,
-            Face::South => 1,
-            Face::East => 2,
-            Face::North => 3,
-        }
-    }
-    /// The halo type code of this face when it is open.
-    pub fn open_code(self) -> u16 {
-        OPEN_WEST + self as u16
-    }
-}
-
-/// A face's boundary condition in lattice units.
-#[derive(Debug, Clone, PartialEq)]
-pub enum FaceCondition {
-    /// Wraps to the opposite face (which must be periodic too).
-    Periodic,
-    /// Half-way bounce-back wall; `solid` indexes [`LatticeSetup::solids`] (its velocity
-    /// makes it a moving wall, Ladd 1994).
-    Wall {
-        /// Solid id (≥ 1).
-        solid: u16,
-    },
-    /// Specular reflection (free slip).
-    FreeSlip,
-    /// Zero-gradient outflow: the halo copies the last interior column/row.
-    Outflow,
-    /// Zou–He velocity; one velocity (lattice units) per cell along the face.
-    Velocity(Vec<[f64; 2]>),
-    /// Zou–He pressure, as density deviation ρ − 1.
-    Pressure(f64),
-    /// A face shared with another rank (or with oneself across a periodic wrap on several
-    /// ranks): its halo is filled by the halo exchange, never by the lattice itself.
-    Exchange,
-}
-
-impl FaceCondition {
-    /// True for Zou–He faces (velocity or pressure).
-    pub fn is_open(&self) -> bool {
-        matches!(
-            self,
-            FaceCondition::Velocity(_) | FaceCondition::Pressure(_)
-        )
-    }
-}
 
 /// A solid body known to the lattice (walls and obstacles).
 #[derive(Debug, Clone, PartialEq)]
@@ -154,20 +80,6 @@ pub enum Layout {
     Pushed,
 }
 
-/// Per-row plan: runs of bulk cells and the special cells between them.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct RowPlan {
-    /// Half-open `[x0, x1)` runs of cells whose 8 neighbours are all plain fluid.
-    pub bulk: Vec<(u32, u32)>,
-    /// Fluid cells needing bounce-back or open-boundary reconstruction.
-    pub special: Vec<u32>,
-    /// Runs `(first, count)` of `special` along a straight wall, which the in-place sweep
-    /// takes in lanes (see `wall_runs`).
-    pub wall_runs: Vec<(u32, u32)>,
-    /// Fluid cells next to an exchanged face: computed after the halo has arrived.
-    pub edge: Vec<u32>,
-}
-
 /// The D2Q9 lattice of one rank: two SoA buffers of shifted populations (one in place, or
 /// when built to go in place) plus geometry.
 pub struct Lattice<T: Real> {
@@ -204,7 +116,7 @@ pub struct Lattice<T: Real> {
     /// How the populations are held (two buffers, or one in place).
     pub(crate) layout: Layout,
     /// The in-place kernel's halo gather, built at its first use.
-    pub(crate) drain_plan: Option<super::inplace::DrainPlan>,
+    pub(crate) drain_plan: Option<DrainPlan>,
     /// During an in-place sweep: δρ of each open corner's diagonal neighbour from the step's
     /// start (W–S, E–S, E–N, W–N), read before the sweep overwrites its slots. None otherwise
     /// (the two-array kernel reads the untouched source buffer).
@@ -217,9 +129,6 @@ pub struct Lattice<T: Real> {
     /// [`Lattice::refresh_exchange_full`].
     pub(crate) full_halo: [Vec<T>; 2],
 }
-
-/// Populations that cross one x face: 3 of the 9.
-pub(crate) const HALO_DIRS: usize = 3;
 
 /// Cell types of the global lattice with its one-cell halo, row-major over the padded
 /// `(nx + 2) × (ny + 2)` grid. Periodic halos take the type of the cell they wrap to
@@ -530,45 +439,4 @@ impl<T: Real> Lattice<T> {
             }
         }
     }
-}
-
-/// Whether every neighbour of padded cell `k` is plain fluid (the bulk kernel may pull it
-/// without boundary handling).
-pub(crate) fn is_plain(types: &[u16], stride: usize, k: usize) -> bool {
-    (1..Q).all(|i| {
-        types[(k as isize - CX[i] as isize - CY[i] as isize * stride as isize) as usize] == FLUID
-    })
-}
-
-/// Classify one interior row into bulk runs, special cells and edge cells (those next to
-/// a face in `exchange` = [west, east]).
-fn row_plan(types: &[u16], stride: usize, nx: usize, y: usize, exchange: [bool; 2]) -> RowPlan {
-    let yp = y + 1;
-    let mut plan = RowPlan::default();
-    let mut run_start: Option<u32> = None;
-    for x in 0..nx {
-        let k = yp * stride + x + 1;
-        let edge = (x == 0 && exchange[0]) || (x + 1 == nx && exchange[1]);
-        if types[k] == FLUID && edge {
-            plan.edge.push(x as u32);
-        }
-        let fluid = types[k] == FLUID && !edge;
-        let plain = fluid && is_plain(types, stride, k);
-        match (plain, run_start) {
-            (true, None) => run_start = Some(x as u32),
-            (false, Some(s)) => {
-                plan.bulk.push((s, x as u32));
-                run_start = None;
-            }
-            _ => {}
-        }
-        if fluid && !plain {
-            plan.special.push(x as u32);
-        }
-    }
-    if let Some(s) = run_start {
-        plan.bulk.push((s, nx as u32));
-    }
-    plan.wall_runs = super::wall_runs::wall_runs(types, stride, yp, &plan.special);
-    plan
 }

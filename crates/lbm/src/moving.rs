@@ -14,10 +14,11 @@
 //! * [`Refill`]: a cell a surface has just uncovered, rebuilt from its fluid neighbours.
 //! * rest fills (equilibrium at ρ = 1 and a given velocity) and cell momenta.
 
-use super::boundary::{Access, Src};
+use super::aligned::Disjoint;
+use super::boundary::{pull, Access, Src};
 use super::collision::{equilibrium, Collider, Moments};
 use super::d2q9::{CX, CY, OPP, Q};
-use super::lattice::{is_plain, Lattice, Layout};
+use super::lattice::{Lattice, Layout};
 use super::partial::{partial_cell, PartialSweep, ShareSums};
 use super::real::Real;
 use rayon::prelude::*;
@@ -27,24 +28,6 @@ pub use super::plans::{
     cell_centre, BodyColumns, LinkPlan, MovingLink, PlanKind, PsmPlan, Refill, RigidMotion,
     SolidShare, NO_SLOT,
 };
-
-/// A raw pointer shared by rayon tasks that write disjoint elements.
-#[derive(Clone, Copy)]
-pub(crate) struct Disjoint<T>(pub(crate) *mut T);
-// SAFETY: every task writes elements no other task touches (see each use).
-unsafe impl<T> Send for Disjoint<T> {}
-unsafe impl<T> Sync for Disjoint<T> {}
-
-impl<T> Disjoint<T> {
-    /// Write `v` at `i`.
-    ///
-    /// # Safety
-    /// `i` is in bounds and no other task reads or writes it during the parallel pass.
-    #[inline(always)]
-    pub(crate) unsafe fn write(&self, i: usize, v: T) {
-        *self.0.add(i) = v;
-    }
-}
 
 /// Shifted equilibrium at ρ = 1 + δρ and velocity u (f64).
 #[inline]
@@ -409,19 +392,6 @@ fn block_slots(cols: &mut BodyColumns, h: usize) {
             );
             cols.body_slot[b as usize] = cols.first[j] as i64 - columns[0] as i64;
         }
-    }
-}
-
-/// Pre-collision populations of interior fluid cell `k` (padded) pulled from `src` (read
-/// through `acc`): a plain pull where every neighbour is plain fluid, the lattice's own wall
-/// and open-face rules otherwise.
-#[inline(always)]
-pub(crate) fn pull<T: Real>(lat: &Lattice<T>, src: Src<T>, acc: Access, k: usize) -> [T; Q] {
-    if is_plain(&lat.types, lat.stride, k) {
-        std::array::from_fn(|i| src.get(acc.pulled(i, k)))
-    } else {
-        let (x, y) = (k % lat.stride - 1, k / lat.stride - 1);
-        lat.gather_special(src, acc, x, y, None)
     }
 }
 

@@ -3,12 +3,13 @@
 //! two-array sweep ([`partial_cell`]), or inside an in-place sweep from the values it has
 //! just loaded and collided ([`PartialSweep`]). Both give the same bits.
 
+use super::aligned::Disjoint;
+use super::boundary::pull;
 use super::boundary::{Access, Src};
 use super::collision::{Collider, Moments};
 use super::d2q9::{by_direction, each_direction, OPP, Q, W};
 use super::lanes::{Lanes, Simd};
 use super::lattice::Lattice;
-use super::moving::{pull, Disjoint};
 use super::plans::{PsmPlan, NO_SLOT};
 use super::real::Real;
 use std::sync::atomic::{AtomicUsize, Ordering};

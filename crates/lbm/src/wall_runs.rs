@@ -7,50 +7,13 @@
 
 use super::boundary::{exchanged_momentum, moving_wall_term, Access};
 use super::bulk_aa::BULK_LANES;
+use super::cells::FLUID;
 use super::collision::Collider;
 use super::d2q9::{CX, CY, OPP, Q};
 use super::lanes::{Lanes, Simd};
-use super::lattice::{Lattice, FLUID, MAX_SOLID};
+use super::lattice::Lattice;
 use super::real::Real;
-
-/// The types of the nine cells padded cell `k` pulls from (its own first), if none is an
-/// open face.
-fn neighbour_types(types: &[u16], stride: usize, k: usize) -> Option<[u16; Q]> {
-    let t: [u16; Q] = std::array::from_fn(|i| {
-        types[(k as isize - CX[i] as isize - CY[i] as isize * stride as isize) as usize]
-    });
-    t.iter().all(|&t| t <= MAX_SOLID).then_some(t)
-}
-
-/// The wall runs among `special` (the special cells of padded row `yp`, in increasing x):
-/// `(first, count)` for each stretch of at least `BULK_LANES` consecutive cells whose
-/// neighbours' types agree direction by direction and include no open face.
-pub(crate) fn wall_runs(
-    types: &[u16],
-    stride: usize,
-    yp: usize,
-    special: &[u32],
-) -> Vec<(u32, u32)> {
-    let of = |x: u32| neighbour_types(types, stride, yp * stride + x as usize + 1);
-    let mut runs = Vec::new();
-    let mut j = 0;
-    while j < special.len() {
-        let Some(first) = of(special[j]) else {
-            j += 1;
-            continue;
-        };
-        let mut e = j + 1;
-        while e < special.len() && special[e] == special[e - 1] + 1 && of(special[e]) == Some(first)
-        {
-            e += 1;
-        }
-        if e - j >= BULK_LANES {
-            runs.push((j as u32, (e - j) as u32));
-        }
-        j = e;
-    }
-    runs
-}
+use super::rows::neighbour_types;
 
 /// Sweep `n` cells (a multiple of `BULK_LANES`) of a wall run in place, from local column
 /// `x0` of interior row `y`, `BULK_LANES` at a time: each direction pulled from its fluid

@@ -9,9 +9,10 @@
 //! (periodic, free-slip, outflow), and across rank faces taken from the neighbours' edge
 //! columns exchanged by [`Lattice::refresh_exchange_full`].
 
+use super::aligned::Disjoint;
 use super::d2q9::Q;
 use super::lattice::{Face, FaceCondition, Lattice};
-use super::moving::{equilibrium_at, momentum_of, refill_cell, Disjoint, Refill};
+use super::moving::{equilibrium_at, momentum_of, refill_cell, Refill};
 use super::real::Real;
 use decomposition::{Comm, Side};
 use rayon::prelude::*;

@@ -53,4 +53,3 @@ pub fn balanced_columns(counts: &[f64], ranks: usize, nx: usize) -> Result<Vec<u
     }
     Ok(bounds)
 }
-

@@ -9,9 +9,9 @@
 //! the same order on both ranks — and as on one rank. Results are therefore bit-identical
 //! on any number of ranks.
 
-use super::points::PACKED;
 pub use super::balance::{balanced_columns, column_counts, MIN_COLUMNS, REBALANCE_EVERY};
 use super::error::MpmError;
+use super::points::PACKED;
 use super::system::MpmSystem;
 use super::transfer::{Strip, Q};
 use decomposition::{swap_neighbours_varlen, Comm};

@@ -1,14 +1,14 @@
 //! One MPM body system and its time step, written as the ordered, timed stages of the
 //! chosen update scheme (USF, USL or MUSL).
 
+use super::balance::{balanced_columns, column_counts, REBALANCE_EVERY};
+pub use super::error::MpmError;
 use super::grid::{Boundaries, GridSpec, NodeFields, SideWalls};
 use super::material::Material;
 use super::mohr_coulomb::Prepared;
 use super::order::{sort_points, OrderScratch, REORDER_EVERY};
 use super::points::Points;
 use super::shape::ShapeKind;
-use super::balance::{balanced_columns, column_counts, REBALANCE_EVERY};
-pub use super::error::MpmError;
 use super::sweeps::{
     average_volumetric, grid_to_points, update_nodes, update_stress, velocities,
     velocity_gradients, Interp, NodeUpdate, VelocityUpdate,
@@ -114,7 +114,6 @@ pub fn critical_dt(materials: &[Material], h: f64) -> f64 {
         .fold(0.0, f64::max);
     h / c
 }
-
 
 /// Points, grid and scratch of one rank.
 #[derive(Debug)]

@@ -1,7 +1,7 @@
 //! Validation of grains-only scenes and their conversion to DEM parameters.
 
-use super::grains::*;
 use super::context::{positive, validate_checks, Context};
+use super::grains::*;
 use super::SceneError;
 use dem::{stable_time_step, ContactModel, DemSetup, Grains, SizeDistribution, Wall};
 use std::path::{Path, PathBuf};

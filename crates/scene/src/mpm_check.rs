@@ -1,10 +1,10 @@
 //! Validation of MPM scenes and their conversion to solver parameters and points.
 
+use super::context::{positive, validate_checks, Context};
 use super::grains::GrainAnalysis;
 use super::grains_check::{non_negative, rectangle};
 use super::mpm::*;
 use super::mpm_material_check::{in_range, material};
-use super::context::{positive, validate_checks, Context};
 use super::SceneError;
 use mpm::{critical_dt, fill, GridSpec, MpmSetup, Points, Shape, ShapeKind, Side, VelocityUpdate};
 use std::path::{Path, PathBuf};

@@ -1,8 +1,8 @@
 //! Validation of `[[mpm.materials]]`: ranges of every constant, with the field named.
 
+use super::context::{positive, Context};
 use super::grains_check::non_negative;
 use super::mpm::*;
-use super::context::{positive, Context};
 use super::SceneError;
 use mpm::mohr_coulomb::Softening;
 use mpm::{InertialFriction, Material, Model, MohrCoulomb};

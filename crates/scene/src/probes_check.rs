@@ -1,8 +1,8 @@
 //! Validation of a scene's probes and analyses: each names what exists and each key is
 //! possible, with the key, its line and the fix in the error.
 
-use super::schema::*;
 use super::context::{positive, validate_checks, Context};
+use super::schema::*;
 use super::SceneError;
 
 /// Probes (unique names, inside the domain, naming what exists) and analyses (each with the

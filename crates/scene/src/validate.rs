@@ -1,8 +1,8 @@
 //! Strict validation of a parsed scene: every impossible value is an error that names the
 //! key, its line and the fix.
 
-use super::schema::*;
 use super::context::{positive, Context};
+use super::schema::*;
 use super::SceneError;
 use lbm::units::{derive, TimeStepChoice, Units};
 
@@ -336,4 +336,3 @@ fn validate_run(s: &Scene, ctx: &Context, units: &Units) -> Result<(), SceneErro
     }
     Ok(())
 }
-

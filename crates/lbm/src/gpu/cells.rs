@@ -2,8 +2,8 @@
 //! refills, cell momenta and full halos go through small gather and scatter kernels, so
 //! their arithmetic is the CPU backend's, to the bit.
 
-use super::fluid::GpuFluid;
 use super::fluid::moving::Kernel;
+use super::fluid::GpuFluid;
 use crate::d2q9::Q;
 use crate::moving::{equilibrium_at, momentum_of, refill_cell, refill_sources, Refill};
 use crate::Real;

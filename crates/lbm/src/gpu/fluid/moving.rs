@@ -164,8 +164,7 @@ impl<T: Real> GpuFluid<T> {
         let (ibuf, rbuf, group) = dev.buffers.as_ref().expect("made above");
         ctx.queue.write_buffer(ibuf, 0, bytemuck::cast_slice(idx));
         if !real.is_empty() {
-            ctx.queue
-                .write_buffer(rbuf, 0, &to_bytes(real));
+            ctx.queue.write_buffer(rbuf, 0, &to_bytes(real));
         }
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         for &(kernel, threads) in kernels.iter().filter(|k| k.1 > 0) {
