@@ -77,9 +77,12 @@ pub enum Command {
         /// Worker threads (default: all cores, or RAYON_NUM_THREADS).
         #[arg(long)]
         threads: Option<usize>,
-        /// Number of steps, overriding the scene's.
-        #[arg(long)]
+        /// Run to this step (at least 1), overriding the scene's length; any kind of scene.
+        #[arg(long, value_parser = whole_steps, conflicts_with = "end_time")]
         steps: Option<u64>,
+        /// Run to this simulated time (s), overriding the scene's length; any kind of scene.
+        #[arg(long, value_name = "SECONDS", value_parser = positive_seconds)]
+        end_time: Option<f64>,
         /// No progress output.
         #[arg(long)]
         quiet: bool,
@@ -122,4 +125,22 @@ pub enum Command {
     },
     /// Print version, threads, ranks and the GPU adapters wgpu finds.
     Info,
+}
+
+/// A finite, positive number of seconds (`--end-time`).
+fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
+        Ok(t) => Err(format!("{t} is not a positive, finite time in seconds")),
+        Err(e) => Err(format!("{text:?} is not a number of seconds: {e}")),
+    }
+}
+
+/// A step count of at least 1 (`--steps`).
+fn whole_steps(text: &str) -> Result<u64, String> {
+    match text.parse::<u64>() {
+        Ok(0) => Err("a run takes at least one step: give --steps 1 or more".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(format!("{text:?} is not a whole number of steps: {e}")),
+    }
 }

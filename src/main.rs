@@ -37,8 +37,20 @@ fn communicator() -> Result<Box<dyn Comm>> {
     }
 }
 
+/// Exit status of a command line that could not be parsed (BSD's EX_USAGE), distinct from
+/// 2 (a check failed).
+const EXIT_USAGE: i32 = 64;
+
 fn real_main() -> Result<i32> {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // --help and --version print to stdout and succeed; anything else is a usage error.
+            let code = if e.use_stderr() { EXIT_USAGE } else { 0 };
+            let _ = e.print();
+            return Ok(code);
+        }
+    };
     match cli.command {
         Command::Info => {
             println!("grainflow {}", env!("CARGO_PKG_VERSION"));
@@ -154,6 +166,7 @@ fn real_main() -> Result<i32> {
             precision,
             threads,
             steps,
+            end_time,
             quiet,
             restart,
             backend,
@@ -179,28 +192,28 @@ fn real_main() -> Result<i32> {
             let s = match scene::load_any(&scene)? {
                 scene::AnyScene::Fluid(s) => *s,
                 scene::AnyScene::Grains(g) => {
-                    if precision.is_some() || backend.is_some() || steps.is_some() {
+                    if precision.is_some() || backend.is_some() {
                         anyhow::bail!(
-                            "--precision, --backend and --steps apply to fluid scenes; \
-                             {} is a grains scene (DEM in f64 on the CPU; its length is \
-                             [run] end_time_s)",
+                            "--precision and --backend apply to the fluid; {} is a grains \
+                             scene (DEM in f64 on the CPU)",
                             scene.display()
                         );
                     }
-                    return in_pool(comm, spin, || {
-                        run_grain_scene(&g, out, !quiet, restart, comm)
-                    });
+                    let mut opts = RunOptions::particles(out, !quiet, restart);
+                    (opts.steps, opts.end_time_s) = (steps, end_time);
+                    return in_pool(comm, spin, || run_grain_scene(&g, &opts, comm));
                 }
                 scene::AnyScene::Mpm(m) => {
-                    if precision.is_some() || backend.is_some() || steps.is_some() {
+                    if precision.is_some() || backend.is_some() {
                         anyhow::bail!(
-                            "--precision, --backend and --steps apply to fluid scenes; \
-                             {} is an MPM scene (f64 on the CPU; its length is \
-                             [run] end_time_s)",
+                            "--precision and --backend apply to the fluid; {} is an MPM \
+                             scene (f64 on the CPU)",
                             scene.display()
                         );
                     }
-                    return in_pool(comm, spin, || run_mpm_scene(&m, out, !quiet, restart, comm));
+                    let mut opts = RunOptions::particles(out, !quiet, restart);
+                    (opts.steps, opts.end_time_s) = (steps, end_time);
+                    return in_pool(comm, spin, || run_mpm_scene(&m, &opts, comm));
                 }
             };
             for w in &s.warnings {
@@ -213,6 +226,7 @@ fn real_main() -> Result<i32> {
                     PrecisionArg::F64 => Precision::F64,
                 }),
                 steps,
+                end_time_s: end_time,
                 progress: !quiet,
                 restart,
                 backend: backend.map(|b| match b {
@@ -234,7 +248,7 @@ fn real_main() -> Result<i32> {
                 eprintln!(
                     "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} rank(s) × {} threads{}",
                     scene.display(),
-                    step_count(&s, steps),
+                    step_count(&s, steps, end_time),
                     s.units.tau,
                     s.units.mach,
                     s.units.reynolds,
@@ -312,9 +326,7 @@ fn default_out(scene: &std::path::Path) -> std::path::PathBuf {
 /// Run a grains scene and report like a fluid run.
 fn run_grain_scene(
     g: &scene::ValidGrainScene,
-    out: std::path::PathBuf,
-    progress: bool,
-    restart: Option<std::path::PathBuf>,
+    opts: &RunOptions,
     comm: &dyn decomposition::Comm,
 ) -> Result<i32> {
     for w in &g.warnings {
@@ -322,7 +334,6 @@ fn run_grain_scene(
             eprintln!("warning: {w}");
         }
     }
-    let opts = RunOptions::particles(out.clone(), progress, restart);
     if comm.is_root() {
         eprintln!(
             "running grains scene {} on {} rank(s) × {} threads{}",
@@ -332,7 +343,7 @@ fn run_grain_scene(
             active_note()
         );
     }
-    let summary = grainflow::run_grains::run_grains(g, &opts, comm)?;
+    let summary = grainflow::run_grains::run_grains(g, opts, comm)?;
     if !comm.is_root() {
         return Ok(exit_code(summary.status));
     }
@@ -354,7 +365,7 @@ fn run_grain_scene(
         status: summary.status,
         steps: summary.steps,
     };
-    Ok(report(&outcome, &out))
+    Ok(report(&outcome, &opts.out_dir))
 }
 
 /// What a particle run (grains or MPM) reports at its end.
@@ -409,7 +420,8 @@ fn print_checks(checks: &[grainflow::analysis::checks::CheckOutcome]) {
     }
 }
 
-/// Exit status: 0 ok, 2 a check failed, 3 unstable, 4 stopped by SIGTERM (checkpoint written).
+/// Exit status: 0 ok, 2 a check failed, 3 unstable, 4 stopped by SIGTERM (checkpoint
+/// written); 1 is any other error and [`EXIT_USAGE`] a command line that did not parse.
 fn exit_code(status: Status) -> i32 {
     match status {
         Status::Ok => 0,
@@ -489,7 +501,7 @@ fn print_check(s: &scene::ValidScene) {
         verdict.describe(&op, u.tau, u.mach)
     );
     println!("  Reynolds number  {:.4}", u.reynolds);
-    println!("  steps            {}", step_count(s, None));
+    println!("  steps            {}", step_count(s, None, None));
     let cells = ((nx + 2) * (ny + 2)) as f64;
     // The in-place kernel (the CPU default) holds one distribution buffer.
     let one = s.scene.run.backend == grainflow::scene::Backend::Cpu
@@ -535,9 +547,7 @@ fn print_check(s: &scene::ValidScene) {
 
 fn run_mpm_scene(
     m: &scene::ValidMpmScene,
-    out: std::path::PathBuf,
-    progress: bool,
-    restart: Option<std::path::PathBuf>,
+    opts: &RunOptions,
     comm: &dyn decomposition::Comm,
 ) -> Result<i32> {
     if comm.is_root() {
@@ -552,8 +562,7 @@ fn run_mpm_scene(
             active_note()
         );
     }
-    let opts = RunOptions::particles(out.clone(), progress, restart);
-    let summary = grainflow::run_mpm::run_mpm(m, &opts, comm)?;
+    let summary = grainflow::run_mpm::run_mpm(m, opts, comm)?;
     if !comm.is_root() {
         return Ok(exit_code(summary.status));
     }
@@ -575,5 +584,5 @@ fn run_mpm_scene(
         status: summary.status,
         steps: summary.steps,
     };
-    Ok(report(&outcome, &out))
+    Ok(report(&outcome, &opts.out_dir))
 }

@@ -38,8 +38,10 @@ pub struct RunOptions {
     pub gpu_storage: Option<GpuStorage>,
     /// CPU kernel override (the scene's `[run] kernel` otherwise).
     pub kernel: Option<Kernel>,
-    /// Step count override.
+    /// Length override: run to this step.
     pub steps: Option<u64>,
+    /// Length override: run to this simulated time (s).
+    pub end_time_s: Option<f64>,
     /// Show progress (bar on a terminal, log lines otherwise).
     pub progress: bool,
     /// Continue from this checkpoint instead of the initial condition.
@@ -47,7 +49,7 @@ pub struct RunOptions {
 }
 
 impl RunOptions {
-    /// Options of a particle run (grains or MPM): no fluid overrides.
+    /// Options of a particle run (grains or MPM): no fluid overrides, the scene's length.
     pub fn particles(out_dir: PathBuf, progress: bool, restart: Option<PathBuf>) -> Self {
         RunOptions {
             out_dir,
@@ -56,6 +58,7 @@ impl RunOptions {
             gpu_storage: None,
             kernel: None,
             steps: None,
+            end_time_s: None,
             progress,
             restart,
         }
@@ -247,12 +250,14 @@ pub fn run_on(scene: &ValidScene, opts: &RunOptions, comm: &dyn Comm) -> Result<
 }
 
 /// Number of steps a run will take.
-pub fn step_count(scene: &ValidScene, override_steps: Option<u64>) -> u64 {
-    override_steps.or(scene.scene.run.steps).unwrap_or_else(|| {
-        (scene.scene.run.end_time_s.unwrap_or(0.0) / scene.units.dt_s)
-            .round()
-            .max(1.0) as u64
-    })
+/// Number of steps a fluid run will take: `steps`, else `end_time_s` (s) in whole steps,
+/// else the scene's own `steps` or `end_time_s`.
+pub fn step_count(scene: &ValidScene, steps: Option<u64>, end_time_s: Option<f64>) -> u64 {
+    let in_steps = |t: f64| (t / scene.units.dt_s).round().max(1.0) as u64;
+    steps
+        .or(end_time_s.map(in_steps))
+        .or(scene.scene.run.steps)
+        .unwrap_or_else(|| in_steps(scene.scene.run.end_time_s.unwrap_or(0.0)))
 }
 
 /// SIGTERM (stop) and SIGUSR1 (checkpoint and go on) flags, registered once per process.
@@ -277,7 +282,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
     comm: &dyn Comm,
 ) -> Result<Summary, RunError> {
     let run = &scene.scene.run;
-    let n = step_count(scene, opts.steps);
+    let n = step_count(scene, opts.steps, opts.end_time_s);
     let backend = opts.backend.unwrap_or(run.backend);
     let storage = opts.gpu_storage.unwrap_or(run.gpu_storage);
     if storage == GpuStorage::F16 && (backend != Backend::Gpu || precision != Precision::F32) {

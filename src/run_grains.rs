@@ -169,7 +169,8 @@ pub fn run_grains(
     let g_abs = s.grains.gravity_m_s2[0].hypot(s.grains.gravity_m_s2[1]);
     let vmax = (2.0 * g_abs * height.max(1e-9)).sqrt();
     let dt = d.system.dt;
-    let total_steps = (s.run.end_time_s / dt).ceil() as u64;
+    let end_time = opts.end_time_s.unwrap_or(s.run.end_time_s);
+    let total_steps = opts.steps.unwrap_or((end_time / dt).ceil() as u64);
     let mut progress = Progress::new(
         total_steps,
         n_total as f64,

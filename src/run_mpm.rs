@@ -253,7 +253,8 @@ pub fn run_mpm(
         picture(&sys)?;
     }
     let dt = sys.setup.dt;
-    let total_steps = (s.run.end_time_s / dt).ceil() as u64;
+    let end_time = opts.end_time_s.unwrap_or(s.run.end_time_s);
+    let total_steps = opts.steps.unwrap_or((end_time / dt).ceil() as u64);
     let mut progress = Progress::new(
         total_steps,
         start_totals.points as f64,

@@ -57,6 +57,7 @@ fn coupled_gpu_blow_up_names_the_cpus_step_cell_and_grain() {
                 out_dir: out.path().to_path_buf(),
                 precision: Some(Precision::F64),
                 steps: None,
+                end_time_s: None,
                 progress: false,
                 restart: None,
                 backend: Some(backend),

@@ -46,6 +46,7 @@ fn run_valid(
         out_dir: out.path().to_path_buf(),
         precision,
         steps: None,
+        end_time_s: None,
         progress: false,
         restart: None,
         backend: None,
