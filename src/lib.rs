@@ -20,6 +20,7 @@ pub use ::scene;
 pub use ::stability;
 
 pub mod coupled;
+pub mod driver;
 pub mod error;
 pub mod pool;
 pub mod progress;

@@ -259,25 +259,28 @@ fn real_main() -> Result<i32> {
             }
             let summary = in_pool(comm, spin, || run_on(&s, &opts, comm))?;
             if !root {
-                return Ok(exit_code(summary.status));
+                return Ok(exit_code(summary.run.status));
             }
             println!(
                 "{} steps in {:.2} s: {:.1} MLUPS (kernel {:.1})",
-                summary.steps, summary.wall_time_s, summary.mlups, summary.kernel_mlups
+                summary.run.steps, summary.run.wall_time_s, summary.mlups, summary.kernel_mlups
             );
-            for (k, v) in &summary.results {
+            for (k, v) in &summary.run.results {
                 println!("  {k} = {v:.6e}");
             }
-            print_checks(&summary.checks);
+            print_checks(&summary.run.checks);
             println!(
                 "output: {}  (summary.json, fields.h5 + fields.xdmf, pictures/, probe_*.csv)",
                 out.display()
             );
-            match summary.status {
+            match summary.run.status {
                 Status::Ok => {}
                 Status::ChecksFailed => eprintln!("error: at least one check failed"),
                 Status::Unstable => {
-                    eprintln!("error: {}", summary.error.as_deref().unwrap_or("unstable"));
+                    eprintln!(
+                        "error: {}",
+                        summary.run.error.as_deref().unwrap_or("unstable")
+                    );
                     eprintln!(
                         "the output written so far is kept in {}, including the last good state",
                         out.display()
@@ -285,11 +288,11 @@ fn real_main() -> Result<i32> {
                 }
                 Status::Interrupted => eprintln!(
                     "stopped by SIGTERM at step {}; continue with --restart {}",
-                    summary.steps,
+                    summary.run.steps,
                     out.join("checkpoint.h5").display()
                 ),
             }
-            Ok(exit_code(summary.status))
+            Ok(exit_code(summary.run.status))
         }
     }
 }
@@ -345,25 +348,25 @@ fn run_grain_scene(
     }
     let summary = grainflow::run_grains::run_grains(g, opts, comm)?;
     if !comm.is_root() {
-        return Ok(exit_code(summary.status));
+        return Ok(exit_code(summary.run.status));
     }
     println!(
         "{} grains, {} steps (Δt = {:.3e} s, settling {} steps) in {:.2} s: {:.2} M grain-steps/s, {} migrated",
         summary.grains,
-        summary.steps,
+        summary.run.steps,
         summary.time_step_s,
         summary.settle_steps,
-        summary.wall_time_s,
+        summary.run.wall_time_s,
         summary.grain_steps_per_s / 1e6,
         summary.migrated
     );
     let outcome = Outcome {
-        results: &summary.results,
-        checks: &summary.checks,
+        results: &summary.run.results,
+        checks: &summary.run.checks,
         files: "grains.h5 + grains.xdmf",
-        error: summary.error.as_deref(),
-        status: summary.status,
-        steps: summary.steps,
+        error: summary.run.error.as_deref(),
+        status: summary.run.status,
+        steps: summary.run.steps,
     };
     Ok(report(&outcome, &opts.out_dir))
 }
@@ -564,25 +567,25 @@ fn run_mpm_scene(
     }
     let summary = grainflow::run_mpm::run_mpm(m, opts, comm)?;
     if !comm.is_root() {
-        return Ok(exit_code(summary.status));
+        return Ok(exit_code(summary.run.status));
     }
     println!(
         "{} material points, {} steps (Δt = {:.3e} s, CFL limit {:.3e} s) in {:.2} s: {:.2} M point-steps/s, {} migrated",
         summary.points,
-        summary.steps,
+        summary.run.steps,
         summary.time_step_s,
         summary.critical_time_step_s,
-        summary.wall_time_s,
+        summary.run.wall_time_s,
         summary.point_steps_per_s / 1e6,
         summary.migrated
     );
     let outcome = Outcome {
-        results: &summary.results,
-        checks: &summary.checks,
+        results: &summary.run.results,
+        checks: &summary.run.checks,
         files: "mpm.h5 + mpm.xdmf",
-        error: summary.error.as_deref(),
-        status: summary.status,
-        steps: summary.steps,
+        error: summary.run.error.as_deref(),
+        status: summary.run.status,
+        steps: summary.run.steps,
     };
     Ok(report(&outcome, &opts.out_dir))
 }

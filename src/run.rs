@@ -2,7 +2,7 @@
 
 use crate::progress::Progress;
 use crate::simulation::{stage, Simulation, STAGES};
-use analysis::checks::{evaluate, CheckOutcome};
+use analysis::checks::evaluate;
 use analysis::{self, Results};
 use decomposition::{Comm, SingleProcess};
 use io::atomic::{ensure_writable_dir, write_atomic};
@@ -15,13 +15,13 @@ use scene::{SceneError, Units, ValidScene};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 mod output;
 use output::Output;
 
+pub use crate::driver::{stage_stats, StageStats, Status};
+use crate::driver::{RunHeader, Signals};
 pub use crate::error::RunError;
 pub use scene::{Backend, GpuStorage, Kernel, Precision};
 
@@ -65,83 +65,14 @@ impl RunOptions {
     }
 }
 
-/// Per-stage statistics over the ranks from each rank's `local` seconds (in the order of
-/// `names`), and the slowest rank's seconds per stage. Collective.
-pub fn stage_stats(
-    names: &[&'static str],
-    local: &[f64],
-    comm: &dyn Comm,
-) -> (
-    BTreeMap<&'static str, StageStats>,
-    BTreeMap<&'static str, f64>,
-) {
-    let all = comm.all_gather_f64(local);
-    let ranks = comm.size();
-    let mut stages = BTreeMap::new();
-    let mut slowest = BTreeMap::new();
-    for (k, name) in names.iter().enumerate() {
-        let v: Vec<f64> = (0..ranks).map(|r| all[r * names.len() + k]).collect();
-        let sum: f64 = v.iter().sum();
-        let max = v.iter().cloned().fold(0.0, f64::max);
-        let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
-        stages.insert(
-            *name,
-            StageStats {
-                sum_s: sum,
-                max_s: max,
-                min_s: min,
-                mean_s: sum / ranks as f64,
-            },
-        );
-        slowest.insert(*name, max);
-    }
-    (stages, slowest)
-}
-
-/// How a run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Status {
-    /// Ran to the end and every check passed.
-    Ok,
-    /// Ran to the end; at least one check failed.
-    ChecksFailed,
-    /// Stopped early: NaN or non-positive density.
-    Unstable,
-    /// Stopped by SIGTERM after writing a checkpoint.
-    Interrupted,
-}
-
-/// Seconds of one stage over the ranks.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct StageStats {
-    /// Sum over ranks.
-    pub sum_s: f64,
-    /// Slowest rank.
-    pub max_s: f64,
-    /// Fastest rank.
-    pub min_s: f64,
-    /// Mean over ranks.
-    pub mean_s: f64,
-}
-
 /// Everything `summary.json` holds.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
-    /// grainflow version.
-    pub version: &'static str,
-    /// Scene file.
-    pub scene_path: PathBuf,
-    /// Scene title.
-    pub title: String,
+    /// The keys every summary starts with (see [`RunHeader`]).
+    #[serde(flatten)]
+    pub run: RunHeader,
     /// The scene as parsed (defaults filled in).
     pub scene: scene::Scene,
-    /// Outcome.
-    pub status: Status,
-    /// Instability report, if any.
-    pub error: Option<String>,
-    /// Warnings from validation.
-    pub warnings: Vec<String>,
     /// Precision used.
     pub precision: Precision,
     /// Backend used.
@@ -150,16 +81,8 @@ pub struct Summary {
     pub gpu_storage: GpuStorage,
     /// The device that ran the fluid solver (rank 0's).
     pub device: String,
-    /// MPI ranks.
-    pub ranks: usize,
-    /// Rayon threads per rank.
-    pub threads: usize,
-    /// Whether the idle threads looked for work through the time loop (`--wait-policy`).
-    pub idle_workers_active: bool,
     /// Columns `[x_begin, x_end)` of each rank.
     pub partition: Vec<[usize; 2]>,
-    /// Step the run started from (0, or the checkpoint's step on a restart).
-    pub restarted_from_step: u64,
     /// Halo bytes sent per step, all ranks together.
     pub halo_bytes_per_step: u64,
     /// Derived lattice parameters.
@@ -170,20 +93,10 @@ pub struct Summary {
     pub fluid_cells: usize,
     /// Distribution storage (bytes).
     pub memory_bytes: usize,
-    /// Steps taken.
-    pub steps: u64,
-    /// Simulated time (s).
-    pub simulated_time_s: f64,
-    /// Wall time of the time loop (s).
-    pub wall_time_s: f64,
     /// Million lattice-cell updates per second over the whole loop (all cells).
     pub mlups: f64,
     /// MLUPS of the collide–stream stage alone.
     pub kernel_mlups: f64,
-    /// Seconds per stage, the slowest rank's (what bounds the run).
-    pub stage_seconds: BTreeMap<&'static str, f64>,
-    /// Seconds per stage over ranks: sum, max, min, mean (load imbalance shows as max ≫ min).
-    pub stages: BTreeMap<&'static str, StageStats>,
     /// Coupled runs: the "coupling" stage's seconds per pass (`coupling::PASSES`), the
     /// slowest rank's. Absent without grains.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
@@ -193,8 +106,6 @@ pub struct Summary {
     /// rescanned). Absent without grains.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub coupling_counts: BTreeMap<&'static str, u64>,
-    /// Checkpoints written during the run.
-    pub checkpoints: Vec<PathBuf>,
     /// HDF5 snapshot data written (bytes, all ranks) and the slowest rank's seconds in
     /// the HDF5 write calls: their ratio is the parallel write bandwidth.
     pub snapshot_bytes: u64,
@@ -206,10 +117,6 @@ pub struct Summary {
     pub totals_final: Totals,
     /// Last sample of each probe (SI).
     pub probes: BTreeMap<String, BTreeMap<String, f64>>,
-    /// Results of the analyses.
-    pub results: Results,
-    /// Checks with their outcome.
-    pub checks: Vec<CheckOutcome>,
 }
 
 /// Validate, run and summarise a scene on one process. See [`run_on`].
@@ -258,21 +165,6 @@ pub fn step_count(scene: &ValidScene, steps: Option<u64>, end_time_s: Option<f64
         .or(end_time_s.map(in_steps))
         .or(scene.scene.run.steps)
         .unwrap_or_else(|| in_steps(scene.scene.run.end_time_s.unwrap_or(0.0)))
-}
-
-/// SIGTERM (stop) and SIGUSR1 (checkpoint and go on) flags, registered once per process.
-pub(crate) fn signal_flags() -> &'static [Arc<AtomicBool>; 2] {
-    static FLAGS: OnceLock<[Arc<AtomicBool>; 2]> = OnceLock::new();
-    FLAGS.get_or_init(|| {
-        let flags = [
-            Arc::new(AtomicBool::new(false)),
-            Arc::new(AtomicBool::new(false)),
-        ];
-        // Registration fails only for forbidden signals; these two are allowed.
-        let _ = signal_hook::flag::register(signal_hook::consts::SIGTERM, flags[0].clone());
-        let _ = signal_hook::flag::register(signal_hook::consts::SIGUSR1, flags[1].clone());
-        flags
-    })
 }
 
 fn run_typed<T: Real + hdf5::H5Type>(
@@ -387,7 +279,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         scene.units.dt_s,
         opts.progress && comm.is_root(),
     );
-    let flags = signal_flags();
+    let signals = Signals::install();
     let mut checkpoints = Vec::new();
     let mut last_checkpoint = Instant::now();
     let start = Instant::now();
@@ -453,19 +345,13 @@ fn run_typed<T: Real + hdf5::H5Type>(
             }
             sim.times.seconds[stage::OUTPUT] += t.elapsed().as_secs_f64();
         }
-        // Signals and wall-clock cadence are agreed on by all ranks, so all checkpoint together.
+        // Signals and the wall-clock cadence are agreed on by all ranks after every step,
+        // so all checkpoint (and stop) together.
         let wall_due = run.checkpoint_minutes > 0.0
             && last_checkpoint.elapsed().as_secs_f64() >= 60.0 * run.checkpoint_minutes;
-        let term = flags[0].load(Ordering::Relaxed);
-        let usr1 = flags[1].swap(false, Ordering::Relaxed);
-        let local = (term as u8) | (usr1 as u8) << 1 | (wall_due as u8) << 2;
-        let agreed = if comm.size() > 1 {
-            comm.max_f64(local as f64) as u8
-        } else {
-            local
-        };
+        let agreed = signals.agree(comm, wall_due);
         let due = (run.checkpoint_every > 0 && step % run.checkpoint_every == 0)
-            || agreed != 0
+            || agreed.checkpoint
             || (step == n && run.checkpoint_at_end);
         if due {
             if let Err(e) = sim.check(comm) {
@@ -476,7 +362,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
             last_checkpoint = Instant::now();
         }
         progress.update(step);
-        if agreed & 1 != 0 {
+        if agreed.stop {
             interrupted = true;
             break;
         }
@@ -598,50 +484,57 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let wall = comm.max_f64(wall);
     let mut halo_bytes = [sim.fluid.lattice().halo_bytes_per_step() as f64];
     comm.sum_f64(&mut halo_bytes);
+    let solver = if sim.grains.is_some() {
+        "coupled"
+    } else {
+        "fluid"
+    };
+    let mut header = RunHeader::new(
+        solver,
+        scene.path.clone(),
+        scene.scene.title.clone(),
+        scene.warnings.clone(),
+        comm,
+    );
+    header.status = status;
+    header.error = error;
+    header.restarted_from_step = start_step;
+    header.steps = steps;
+    header.simulated_time_s = scene.units.time_si(steps);
+    header.wall_time_s = wall;
+    header.stage_seconds = stages.iter().map(|(k, v)| (*k, v.max_s)).collect();
+    let kernel_mlups = updates / stages[STAGES[stage::COLLIDE_STREAM]].max_s.max(1e-12) / 1e6;
+    header.stages = stages;
+    header.checkpoints = checkpoints;
+    header.results = results;
+    header.checks = checks;
     let summary = Summary {
-        version: env!("CARGO_PKG_VERSION"),
-        scene_path: scene.path.clone(),
-        title: scene.scene.title.clone(),
+        run: header,
         scene: scene.scene.clone(),
-        status,
-        error,
-        warnings: scene.warnings.clone(),
         precision,
         backend,
         gpu_storage: storage,
         device: sim.fluid.device(),
-        ranks: comm.size(),
-        threads: rayon::current_num_threads(),
-        idle_workers_active: crate::pool::idle_workers_active(),
         partition: (0..comm.size())
             .map(|r| {
                 let s = sim.partition.slab(r);
                 [s.x_begin, s.x_end]
             })
             .collect(),
-        restarted_from_step: start_step,
         halo_bytes_per_step: halo_bytes[0] as u64,
         units: scene.units,
         cells: [nx, ny],
         fluid_cells: sim.fluid_cells(comm),
         memory_bytes: sim.fluid.lattice().storage_bytes(),
-        steps,
-        simulated_time_s: scene.units.time_si(steps),
-        wall_time_s: wall,
         mlups: updates / wall.max(1e-12) / 1e6,
-        kernel_mlups: updates / stages[STAGES[stage::COLLIDE_STREAM]].max_s.max(1e-12) / 1e6,
-        stage_seconds: stages.iter().map(|(k, v)| (*k, v.max_s)).collect(),
-        stages,
+        kernel_mlups,
         coupling_pass_seconds,
         coupling_counts,
-        checkpoints,
         snapshot_bytes: out.bytes,
         snapshot_write_s: comm.max_f64(out.write_s),
         totals_initial,
         totals_final,
         probes,
-        results,
-        checks,
     };
     if comm.is_root() {
         for s in &sim.series {

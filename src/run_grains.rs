@@ -2,9 +2,10 @@
 //! time loop of named, timed stages — walls (removals), DEM step (with migration and
 //! ghost exchange inside), output — and the analyses, checks and `summary.json`.
 
+use crate::driver::{RunHeader, Signals, StageClock};
 use crate::progress::Progress;
-use crate::run::{stage_stats, RunError, RunOptions, StageStats, Status};
-use analysis::checks::{evaluate, CheckOutcome};
+use crate::run::{stage_stats, RunError, RunOptions, Status};
+use analysis::checks::evaluate;
 use analysis::collapse::{collapse_results, pile_shape, QUANTITIES};
 use analysis::Results;
 use decomposition::Comm;
@@ -15,9 +16,7 @@ use io::grains_checkpoint::{self, GrainRunState};
 use io::grains_out::{write_grains_png, GrainWriter};
 use scene::{GrainAnalysis, GrainScene, ValidGrainScene};
 use serde::Serialize;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 pub(crate) mod sample;
@@ -31,26 +30,11 @@ pub const GRAIN_STAGES: [&str; 3] = ["walls", "dem", "output"];
 /// Everything a grains run's `summary.json` holds.
 #[derive(Debug, Clone, Serialize)]
 pub struct GrainSummary {
-    /// grainflow version.
-    pub version: &'static str,
-    /// Scene file.
-    pub scene_path: std::path::PathBuf,
-    /// Scene title.
-    pub title: String,
+    /// The keys every summary starts with (see [`RunHeader`]).
+    #[serde(flatten)]
+    pub run: RunHeader,
     /// The scene as parsed.
     pub scene: GrainScene,
-    /// Outcome.
-    pub status: Status,
-    /// What went wrong, if anything.
-    pub error: Option<String>,
-    /// Validation warnings.
-    pub warnings: Vec<String>,
-    /// MPI ranks.
-    pub ranks: usize,
-    /// Rayon threads per rank.
-    pub threads: usize,
-    /// Whether the idle threads looked for work through the time loop (`--wait-policy`).
-    pub idle_workers_active: bool,
     /// x-boundaries of the ranks' slabs at the end (m).
     pub slab_bounds_m: Vec<f64>,
     /// Grains in the run.
@@ -61,22 +45,8 @@ pub struct GrainSummary {
     pub lambda: f64,
     /// Steps spent settling the sample (0 when it was not settled).
     pub settle_steps: u64,
-    /// Step the run started from (0, or the checkpoint's step on a restart).
-    pub restarted_from_step: u64,
-    /// Checkpoints written during the run.
-    pub checkpoints: Vec<PathBuf>,
-    /// Steps of the run.
-    pub steps: u64,
-    /// Simulated time (s).
-    pub simulated_time_s: f64,
-    /// Wall time of the time loop (s).
-    pub wall_time_s: f64,
     /// Grain-steps per second over the loop (all ranks).
     pub grain_steps_per_s: f64,
-    /// Seconds per stage, slowest rank.
-    pub stage_seconds: BTreeMap<&'static str, f64>,
-    /// Seconds per stage over ranks.
-    pub stages: BTreeMap<&'static str, StageStats>,
     /// Grains handed to another rank, all ranks together.
     pub migrated: u64,
     /// Times the slab boundaries moved to rebalance the grain counts.
@@ -93,10 +63,6 @@ pub struct GrainSummary {
     pub momentum: [f64; 2],
     /// Snapshots written.
     pub snapshots: usize,
-    /// Results of the analyses.
-    pub results: Results,
-    /// Checks with their outcome.
-    pub checks: Vec<CheckOutcome>,
 }
 
 /// Run a grains scene on every rank of `comm` (collective). Writes `grains.h5` +
@@ -145,7 +111,7 @@ pub fn run_grains(
     let region = (s.region.min_m, s.region.max_m);
     let mut writer =
         GrainWriter::open(&opts.out_dir, comm, resume.as_ref().map(|r| r.step), false)?;
-    let mut stage = [0.0f64; GRAIN_STAGES.len()];
+    let mut clock = StageClock::new(&GRAIN_STAGES);
     let picture = |d: &SlabDem, vmax: f64| -> Result<(), RunError> {
         let name = format!("grains_step_{:08}.png", d.system.steps);
         write_grains_png(
@@ -205,7 +171,7 @@ pub fn run_grains(
     let mut fronts: Vec<(f64, f64)> = Vec::new();
     let mut status = Status::Ok;
     let mut error = None;
-    let flags = crate::run::signal_flags();
+    let signals = Signals::install();
     let checkpoint_path = opts.out_dir.join("checkpoint.h5");
     let mut checkpoints = Vec::new();
     let initial_rows: Vec<f64> = (0..initial.len())
@@ -233,11 +199,11 @@ pub fn run_grains(
                 d.system.remove_wall(w);
             }
         }
-        stage[0] += t.elapsed().as_secs_f64();
+        clock.add("walls", t);
         let t = Instant::now();
         d.step(comm);
         step += 1;
-        stage[1] += t.elapsed().as_secs_f64();
+        clock.add("dem", t);
         let t = Instant::now();
         if let (Some((wx, fy)), true) = (collapse_at, step % 1000 == 0 && start_step == 0) {
             let g = gather_grains(&d.system, comm);
@@ -270,22 +236,18 @@ pub fn run_grains(
             }
         }
         // After the snapshot, so a restart does not write it again. Signals are agreed on
-        // by all ranks (every 100 steps), so all ranks checkpoint together.
-        let (mut term, mut usr1) = (false, false);
-        if step % 100 == 0 {
-            term = comm.any(flags[0].load(Ordering::Relaxed));
-            usr1 = comm.any(flags[1].swap(false, Ordering::Relaxed));
-        }
+        // by all ranks after every step, so all ranks checkpoint (and stop) together.
+        let agreed = signals.agree(comm, false);
         let every = s.run.checkpoint_every > 0 && step % s.run.checkpoint_every == 0;
-        if term || usr1 || every {
+        if agreed.checkpoint || every {
             write_checkpoint(&d, next_output, &mut checkpoints)?;
         }
-        if term {
+        if agreed.stop {
             status = Status::Interrupted;
-            stage[2] += t.elapsed().as_secs_f64();
+            clock.add("output", t);
             break;
         }
-        stage[2] += t.elapsed().as_secs_f64();
+        clock.add("output", t);
         progress.update(step);
     }
     progress.finish();
@@ -299,7 +261,7 @@ pub fn run_grains(
         if s.run.pictures {
             picture(&d, vmax)?;
         }
-        stage[2] += t.elapsed().as_secs_f64();
+        clock.add("output", t);
     }
     // Analyses on the gathered deposit.
     let mut results = Results::new();
@@ -332,8 +294,7 @@ pub fn run_grains(
     if status == Status::Ok && checks.iter().any(|c| !c.passed) {
         status = Status::ChecksFailed;
     }
-    let ranks = comm.size();
-    let (stages, stage_seconds) = stage_stats(&GRAIN_STAGES, &stage, comm);
+    let (stages, stage_seconds) = stage_stats(&GRAIN_STAGES, clock.seconds(), comm);
     let (ke, momentum, _) = global_state(&d, comm);
     let mut counts = [
         d.migrated as f64,
@@ -342,30 +303,33 @@ pub fn run_grains(
     ];
     let comm_wait = comm.max_f64(d.comm_seconds);
     comm.sum_f64(&mut counts);
+    let mut header = RunHeader::new(
+        "grains",
+        scene.path.clone(),
+        s.title.clone(),
+        scene.warnings.clone(),
+        comm,
+    );
+    header.status = status;
+    header.error = error;
+    header.restarted_from_step = start_step;
+    header.steps = step;
+    header.simulated_time_s = d.system.time;
+    header.wall_time_s = wall;
+    header.stage_seconds = stage_seconds;
+    header.stages = stages;
+    header.checkpoints = checkpoints;
+    header.results = results;
+    header.checks = checks;
     let summary = GrainSummary {
-        version: env!("CARGO_PKG_VERSION"),
-        scene_path: scene.path.clone(),
-        title: s.title.clone(),
+        run: header,
         scene: s.clone(),
-        status,
-        error,
-        warnings: scene.warnings.clone(),
-        ranks,
-        threads: rayon::current_num_threads(),
-        idle_workers_active: crate::pool::idle_workers_active(),
         slab_bounds_m: d.bounds().to_vec(),
         grains: n_total,
         time_step_s: dt,
         lambda: scene.lambda(),
         settle_steps,
-        restarted_from_step: start_step,
-        checkpoints,
-        steps: step,
-        simulated_time_s: d.system.time,
-        wall_time_s: wall,
         grain_steps_per_s: n_total as f64 * (step - start_step) as f64 / wall.max(1e-12),
-        stage_seconds,
-        stages,
         migrated: counts[0] as u64,
         rebalances: d.rebalances,
         comm_wait_s: comm_wait,
@@ -374,8 +338,6 @@ pub fn run_grains(
         kinetic_energy_j_m: ke,
         momentum,
         snapshots: writer.snapshots(),
-        results,
-        checks,
     };
     if comm.is_root() {
         let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");

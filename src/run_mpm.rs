@@ -2,9 +2,10 @@
 //! the solver's timed stages (sort, P2G with the strip exchange, grid, stress, G2P,
 //! migration) plus output, and at the end the analyses, checks and `summary.json`.
 
+use crate::driver::{RunHeader, Signals};
 use crate::progress::Progress;
-use crate::run::{stage_stats, RunError, RunOptions, StageStats, Status};
-use analysis::checks::{evaluate, CheckOutcome};
+use crate::run::{stage_stats, RunError, RunOptions, Status};
+use analysis::checks::evaluate;
 use analysis::collapse::{
     collapse_results, thick_front, thick_front_results, PileShape, QUANTITIES, THICK_QUANTITIES,
 };
@@ -16,34 +17,17 @@ use io::mpm_out::{write_mpm_png, MpmWriter};
 use mpm::{MpmError, MpmSystem, Points, MPM_STAGES};
 use scene::{GrainAnalysis, MpmScene, PictureField, ValidMpmScene};
 use serde::Serialize;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// Everything an MPM run's `summary.json` holds.
 #[derive(Debug, Clone, Serialize)]
 pub struct MpmSummary {
-    /// grainflow version.
-    pub version: &'static str,
-    /// Scene file.
-    pub scene_path: PathBuf,
-    /// Scene title.
-    pub title: String,
+    /// The keys every summary starts with (see [`RunHeader`]).
+    #[serde(flatten)]
+    pub run: RunHeader,
     /// The scene as parsed.
     pub scene: MpmScene,
-    /// Outcome.
-    pub status: Status,
-    /// What went wrong (step and point), if anything.
-    pub error: Option<String>,
-    /// Validation warnings.
-    pub warnings: Vec<String>,
-    /// MPI ranks.
-    pub ranks: usize,
-    /// Rayon threads per rank.
-    pub threads: usize,
-    /// Whether the idle threads looked for work through the time loop (`--wait-policy`).
-    pub idle_workers_active: bool,
     /// Cell-column boundaries of the ranks' slabs at the end.
     pub slab_columns: Vec<usize>,
     /// Material points.
@@ -56,22 +40,8 @@ pub struct MpmSummary {
     pub time_step_s: f64,
     /// See `time_step_s`.
     pub critical_time_step_s: f64,
-    /// Step the run started from (0, or the checkpoint's step).
-    pub restarted_from_step: u64,
-    /// Checkpoints written.
-    pub checkpoints: Vec<PathBuf>,
-    /// Steps done.
-    pub steps: u64,
-    /// Simulated time (s).
-    pub simulated_time_s: f64,
-    /// Wall time of the time loop (s).
-    pub wall_time_s: f64,
     /// Point updates per second over the loop (all ranks).
     pub point_steps_per_s: f64,
-    /// Seconds per stage, slowest rank (sort, p2g, grid, stress, g2p, migrate, output).
-    pub stage_seconds: BTreeMap<&'static str, f64>,
-    /// Seconds per stage over ranks.
-    pub stages: BTreeMap<&'static str, StageStats>,
     /// Points handed to another rank.
     pub migrated: u64,
     /// Slab rebalances.
@@ -88,10 +58,6 @@ pub struct MpmSummary {
     pub yielding_points: u64,
     /// Snapshots written.
     pub snapshots: usize,
-    /// Results of the analyses.
-    pub results: Results,
-    /// Checks with their outcome.
-    pub checks: Vec<CheckOutcome>,
 }
 
 /// Names of the stages in `summary.json`: the solver's, then output.
@@ -265,7 +231,7 @@ pub fn run_mpm(
     let mut next_output = resume.map_or(s.run.output_every_s, |r| r.next_output_s);
     let start_step = sys.steps;
     let (mut status, mut error, mut stop_time) = (Status::Ok, None, None);
-    let flags = crate::run::signal_flags();
+    let signals = Signals::install();
     let checkpoint_path = opts.out_dir.join("checkpoint.h5");
     let mut checkpoints = Vec::new();
     let write_checkpoint = |sys: &MpmSystem, next_output: f64, list: &mut Vec<PathBuf>| {
@@ -315,18 +281,15 @@ pub fn run_mpm(
             writer.write(&sys, comm)?;
             picture(&sys)?;
         }
-        // Signals are agreed on by all ranks every 100 steps, so all checkpoint together.
-        let (mut term, mut usr1) = (false, false);
-        if step % 100 == 0 {
-            term = comm.any(flags[0].load(Ordering::Relaxed));
-            usr1 = comm.any(flags[1].swap(false, Ordering::Relaxed));
-        }
+        // Signals are agreed on by all ranks after every step, so all ranks checkpoint (and
+        // stop) together.
+        let agreed = signals.agree(comm, false);
         let every = s.run.checkpoint_every > 0 && step % s.run.checkpoint_every == 0;
-        if term || usr1 || every {
+        if agreed.checkpoint || every {
             write_checkpoint(&sys, next_output, &mut checkpoints)?;
         }
         output_seconds += t.elapsed().as_secs_f64();
-        if term {
+        if agreed.stop {
             status = Status::Interrupted;
             break;
         }
@@ -381,32 +344,35 @@ pub fn run_mpm(
     comm.sum_f64(&mut counts);
     let comm_wait = comm.max_f64(sys.comm_seconds);
     debug_assert_eq!(MPM_STAGES.len() + 1, STAGES.len());
+    let mut header = RunHeader::new(
+        "mpm",
+        scene.path.clone(),
+        s.title.clone(),
+        scene.warnings.clone(),
+        comm,
+    );
+    header.status = status;
+    header.error = error;
+    header.restarted_from_step = start_step;
+    header.steps = sys.steps;
+    header.simulated_time_s = sys.time;
+    header.wall_time_s = wall;
+    header.stage_seconds = stage_seconds;
+    header.stages = stages;
+    header.checkpoints = checkpoints;
+    header.results = results;
+    header.checks = checks;
     let summary = MpmSummary {
-        version: env!("CARGO_PKG_VERSION"),
-        scene_path: scene.path.clone(),
-        title: s.title.clone(),
+        run: header,
         scene: s.clone(),
-        status,
-        error,
-        warnings: scene.warnings.clone(),
-        ranks: comm.size(),
-        threads: rayon::current_num_threads(),
-        idle_workers_active: crate::pool::idle_workers_active(),
         slab_columns: sys.slab_columns().to_vec(),
         points: start_totals.points,
         cells: [spec.nx, spec.ny],
         cell_size_m: spec.h,
         time_step_s: dt,
         critical_time_step_s: scene.critical_dt,
-        restarted_from_step: start_step,
-        checkpoints,
-        steps: sys.steps,
-        simulated_time_s: sys.time,
-        wall_time_s: wall,
         point_steps_per_s: start_totals.points as f64 * (sys.steps - start_step) as f64
             / wall.max(1e-12),
-        stage_seconds,
-        stages,
         migrated: counts[0] as u64,
         rebalances: sys.rebalances,
         comm_wait_s: comm_wait,
@@ -415,8 +381,6 @@ pub fn run_mpm(
         momentum: end.momentum,
         yielding_points: counts[1] as u64,
         snapshots: writer.snapshots(),
-        results,
-        checks,
     };
     if comm.is_root() {
         let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");

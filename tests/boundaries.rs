@@ -31,7 +31,12 @@ pictures = false
 fn max_deviation(text: &str, u: [f64; 2]) -> f64 {
     let dir = tempfile::tempdir().unwrap();
     let (s, out) = run_text(text, dir.path(), Some(Precision::F64));
-    assert_eq!(s.status, grainflow::run::Status::Ok, "{:?}", s.error);
+    assert_eq!(
+        s.run.status,
+        grainflow::run::Status::Ok,
+        "{:?}",
+        s.run.error
+    );
     let f = hdf5::File::open(out.path().join("fields.h5")).unwrap();
     let v: Vec<f64> = f
         .dataset("step_00000400/velocity")

@@ -85,12 +85,12 @@ fn last_force(s: &grainflow::run::Summary) -> [f64; 2] {
 fn held_grain_feels_the_obstacle_drag() {
     let dir = tempfile::tempdir().unwrap();
     let (obstacle, _a) = run_text(&channel(false, ""), dir.path(), None);
-    assert_eq!(obstacle.status, Status::Ok, "{:?}", obstacle.error);
+    assert_eq!(obstacle.run.status, Status::Ok, "{:?}", obstacle.run.error);
     let fo = last_force(&obstacle);
     eprintln!("obstacle drag: {fo:?} N/m");
     for (scheme, limit) in [("bounce-back", 1e-6), ("interpolated", 0.05), ("psm", 0.05)] {
         let (g, _b) = run_text(&channel(true, scheme), dir.path(), None);
-        assert_eq!(g.status, Status::Ok, "{scheme}: {:?}", g.error);
+        assert_eq!(g.run.status, Status::Ok, "{scheme}: {:?}", g.run.error);
         let fg = last_force(&g);
         let rel = (fg[0] - fo[0]).abs() / fo[0].abs();
         eprintln!("{scheme}: grain drag {fg:?} N/m, relative difference {rel:.3e} (limit {limit})");
@@ -156,7 +156,7 @@ fn fluid_and_grain_momentum_is_conserved() {
     let dir = tempfile::tempdir().unwrap();
     for scheme in ["bounce-back", "psm"] {
         let (s, _o) = run_text(&momentum_box(scheme), dir.path(), None);
-        assert_eq!(s.status, Status::Ok, "{scheme}: {:?}", s.error);
+        assert_eq!(s.run.status, Status::Ok, "{scheme}: {:?}", s.run.error);
         let drift = result(&s, "momentum.relative_drift");
         let (gx, fx) = (
             result(&s, "momentum.grains_x_kg_m_s"),
@@ -321,14 +321,14 @@ fn coupled_run_that_blows_up_stops_with_the_step() {
             .replace("velocity_m_s = [0.01, 0.004]", "velocity_m_s = [1.5, 0.0]")
             .replace("steps = 10000", "steps = 2000");
         let (s, _o) = run_text(&text, dir.path(), None);
-        assert_eq!(s.status, Status::Unstable, "{scheme}");
-        let e = s.error.unwrap();
+        assert_eq!(s.run.status, Status::Unstable, "{scheme}");
+        let e = s.run.error.unwrap();
         eprintln!("{scheme}: {e}");
         assert!(e.contains("unstable at step"), "{e}");
         assert!(e.contains("grain 0"), "{e}");
         // The step that went bad, counted from 1 as the fluid's errors count it; its sweep
         // completed, so the run stopped in (and kept, for diagnosis) that step's state.
-        assert_eq!(common::unstable_step(&e), s.steps, "{scheme}: {e}");
+        assert_eq!(common::unstable_step(&e), s.run.steps, "{scheme}: {e}");
     }
 }
 
@@ -396,7 +396,7 @@ fn coupled_output_has_fluid_and_grains() {
         "steps = 200\noutput_every = 100",
     );
     let (s, out) = run_text(&text, dir.path(), None);
-    assert_eq!(s.status, Status::Ok, "{:?}", s.error);
+    assert_eq!(s.run.status, Status::Ok, "{:?}", s.run.error);
     let d = out.path();
     let g = hdf5::File::open(d.join("grains.h5")).unwrap();
     for step in ["step_00000000", "step_00000100", "step_00000200"] {
@@ -444,7 +444,7 @@ fn coupled_results_do_not_depend_on_the_thread_count() {
                 .unwrap();
             pool.install(|| {
                 let (s, _o) = run_text(&text, dir.path(), None);
-                assert_eq!(s.status, Status::Ok, "{scheme}: {:?}", s.error);
+                assert_eq!(s.run.status, Status::Ok, "{scheme}: {:?}", s.run.error);
                 s.probes
             })
         };

@@ -183,8 +183,8 @@ fn poiseuille_validation_passes_on_the_gpu() {
     assert_checks_pass(&gpu);
     assert!(gpu.device.starts_with("gpu"), "{}", gpu.device);
     let cpu = run_on(&path, Backend::Cpu, Precision::F64);
-    for (k, v) in &cpu.results {
-        let g = gpu.results[k];
+    for (k, v) in &cpu.run.results {
+        let g = gpu.run.results[k];
         // Error metrics are themselves small differences: compare on the scale of 1.
         assert!(
             (g - v).abs() <= 1e-12 * v.abs().max(1.0),
@@ -226,9 +226,9 @@ steps = 5000
     std::fs::write(&path, text).unwrap();
     let cpu = run_on(&path, Backend::Cpu, Precision::F64);
     let gpu = run_on(&path, Backend::Gpu, Precision::F64);
-    assert_eq!(cpu.status, Status::Unstable);
-    assert_eq!(gpu.status, Status::Unstable);
-    let (ce, ge) = (cpu.error.unwrap(), gpu.error.unwrap());
+    assert_eq!(cpu.run.status, Status::Unstable);
+    assert_eq!(gpu.run.status, Status::Unstable);
+    let (ce, ge) = (cpu.run.error.unwrap(), gpu.run.error.unwrap());
     eprintln!("cpu: {ce}\ngpu: {ge}");
     // "unstable at step S: cell (X, Y) …": the same step and cell.
     let head = |e: &str| e.split(" has density").next().unwrap().to_string();

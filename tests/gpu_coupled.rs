@@ -65,8 +65,8 @@ fn coupled_gpu_blow_up_names_the_cpus_step_cell_and_grain() {
                 kernel: Some(Kernel::TwoArray),
             };
             let s = run(&scene, &opts).unwrap_or_else(|e| panic!("{e}"));
-            assert_eq!(s.status, Status::Unstable, "{scheme} on {backend:?}");
-            s.error.unwrap()
+            assert_eq!(s.run.status, Status::Unstable, "{scheme} on {backend:?}");
+            s.run.error.unwrap()
         };
         let (cpu, gpu) = (error(Backend::Cpu), error(Backend::Gpu));
         eprintln!("{scheme}\n  cpu: {cpu}\n  gpu: {gpu}");

@@ -80,3 +80,53 @@ fn a_command_line_that_does_not_parse_exits_with_the_usage_code() {
     let o = grainflow(1, &["--version"]);
     assert_eq!(o.status.code(), Some(0));
 }
+
+/// The keys `driver::RunHeader` gives every summary.json.
+const HEADER: [&str; 19] = [
+    "version",
+    "solver",
+    "scene_path",
+    "title",
+    "status",
+    "error",
+    "warnings",
+    "ranks",
+    "threads",
+    "idle_workers_active",
+    "restarted_from_step",
+    "steps",
+    "simulated_time_s",
+    "wall_time_s",
+    "stage_seconds",
+    "stages",
+    "checkpoints",
+    "results",
+    "checks",
+];
+
+#[test]
+fn every_kind_of_run_writes_the_same_summary_header() {
+    let dir = tempfile::tempdir().unwrap();
+    for (solver, scene) in [
+        ("fluid", "tests/scenes/mpi_channel.toml"),
+        ("coupled", "tests/scenes/submerged_small.toml"),
+        ("grains", "tests/scenes/grains_collapse.toml"),
+        ("mpm", "tests/scenes/mpm_collapse.toml"),
+    ] {
+        let out = dir.path().join(solver);
+        let o = grainflow(
+            1,
+            &["run", scene, "--out", out.to_str().unwrap(), "--steps", "3"],
+        );
+        assert!(o.status.success(), "{solver}: {scene} failed");
+        let s = summary(&out);
+        for key in HEADER {
+            assert!(s.get(key).is_some(), "{solver}: summary.json has no {key}");
+        }
+        assert_eq!(s["solver"], solver);
+        assert_eq!(s["steps"], 3, "{solver}");
+        assert!(s["stage_seconds"]
+            .as_object()
+            .is_some_and(|m| !m.is_empty()));
+    }
+}

@@ -62,5 +62,5 @@ fn mass_conservation() {
         Some(Precision::F64),
     );
     assert_checks_pass(&s);
-    assert_eq!(s.steps, 10_000);
+    assert_eq!(s.run.steps, 10_000);
 }

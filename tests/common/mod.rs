@@ -59,7 +59,7 @@ fn run_valid(
 
 /// Assert the run finished and every check of the scene passed, printing them.
 pub fn assert_checks_pass(s: &Summary) {
-    for c in &s.checks {
+    for c in &s.run.checks {
         eprintln!(
             "  {} = {:?} (expected {:?} ±{:?}/{:?}, min {:?}, max {:?}) passed={}",
             c.quantity,
@@ -73,23 +73,24 @@ pub fn assert_checks_pass(s: &Summary) {
         );
     }
     assert_eq!(
-        s.status,
+        s.run.status,
         Status::Ok,
         "status {:?}, error {:?}",
-        s.status,
-        s.error
+        s.run.status,
+        s.run.error
     );
     assert!(
-        !s.checks.is_empty(),
+        !s.run.checks.is_empty(),
         "a validation scene must declare checks"
     );
 }
 
 /// A named result.
 pub fn result(s: &Summary, name: &str) -> f64 {
-    *s.results
+    *s.run
+        .results
         .get(name)
-        .unwrap_or_else(|| panic!("no result {name}; have {:?}", s.results.keys()))
+        .unwrap_or_else(|| panic!("no result {name}; have {:?}", s.run.results.keys()))
 }
 
 /// A scene from `jobs/` with some text replacements applied.

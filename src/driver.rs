@@ -1,0 +1,249 @@
+//! What every solver's time loop shares: named stage timers, the signals agreed by all
+//! ranks at the same cadence, and the header every `summary.json` starts with (the same
+//! keys for fluid, coupled, grain and MPM runs).
+
+use analysis::checks::CheckOutcome;
+use analysis::Results;
+use decomposition::Comm;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
+use std::time::Instant;
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Status {
+    /// Ran to the end and every check passed.
+    Ok,
+    /// Ran to the end; at least one check failed.
+    ChecksFailed,
+    /// Stopped early: NaN or non-positive density.
+    Unstable,
+    /// Stopped by SIGTERM after writing a checkpoint.
+    Interrupted,
+}
+
+/// Seconds of one stage over the ranks.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct StageStats {
+    /// Sum over ranks.
+    pub sum_s: f64,
+    /// Slowest rank.
+    pub max_s: f64,
+    /// Fastest rank.
+    pub min_s: f64,
+    /// Mean over ranks.
+    pub mean_s: f64,
+}
+
+/// The keys every `summary.json` starts with, whatever the solver (flattened into each
+/// solver's summary, which adds its own figures after them).
+#[derive(Debug, Clone, Serialize)]
+pub struct RunHeader {
+    /// grainflow version.
+    pub version: &'static str,
+    /// What ran: "fluid", "coupled" (fluid with grains), "grains" or "mpm".
+    pub solver: &'static str,
+    /// Scene file.
+    pub scene_path: PathBuf,
+    /// Scene title.
+    pub title: String,
+    /// Outcome.
+    pub status: Status,
+    /// What went wrong (an instability, with step and place), if anything.
+    pub error: Option<String>,
+    /// Warnings from validation.
+    pub warnings: Vec<String>,
+    /// MPI ranks.
+    pub ranks: usize,
+    /// Rayon threads per rank.
+    pub threads: usize,
+    /// Whether the idle threads looked for work through the time loop (`--wait-policy`).
+    pub idle_workers_active: bool,
+    /// Step the run started from (0, or the checkpoint's step on a restart).
+    pub restarted_from_step: u64,
+    /// Steps taken (the last step's number).
+    pub steps: u64,
+    /// Simulated time at the end (s).
+    pub simulated_time_s: f64,
+    /// Wall time of the time loop (s).
+    pub wall_time_s: f64,
+    /// Seconds per stage, the slowest rank's (what bounds the run).
+    pub stage_seconds: BTreeMap<&'static str, f64>,
+    /// Seconds per stage over ranks: sum, max, min, mean (load imbalance shows as max ≫ min).
+    pub stages: BTreeMap<&'static str, StageStats>,
+    /// Checkpoints written during the run.
+    pub checkpoints: Vec<PathBuf>,
+    /// Results of the analyses.
+    pub results: Results,
+    /// Checks with their outcome.
+    pub checks: Vec<CheckOutcome>,
+}
+
+impl RunHeader {
+    /// The header of a run of `solver` on `comm`: its scene, the machine, and nothing run
+    /// yet (status ok, no steps, no results); the time loop fills in the rest.
+    pub fn new(
+        solver: &'static str,
+        scene_path: PathBuf,
+        title: String,
+        warnings: Vec<String>,
+        comm: &dyn Comm,
+    ) -> Self {
+        RunHeader {
+            version: env!("CARGO_PKG_VERSION"),
+            solver,
+            scene_path,
+            title,
+            status: Status::Ok,
+            error: None,
+            warnings,
+            ranks: comm.size(),
+            threads: rayon::current_num_threads(),
+            idle_workers_active: crate::pool::idle_workers_active(),
+            restarted_from_step: 0,
+            steps: 0,
+            simulated_time_s: 0.0,
+            wall_time_s: 0.0,
+            stage_seconds: BTreeMap::new(),
+            stages: BTreeMap::new(),
+            checkpoints: Vec::new(),
+            results: Results::new(),
+            checks: Vec::new(),
+        }
+    }
+
+    /// Fill in the stage timings from each rank's `clock` (collective).
+    pub fn set_stages(&mut self, clock: &StageClock, comm: &dyn Comm) {
+        let (stages, slowest) = stage_stats(clock.names, &clock.seconds, comm);
+        self.stages = stages;
+        self.stage_seconds = slowest;
+    }
+}
+
+/// The seconds spent in each named stage of a step on this rank.
+#[derive(Debug, Clone)]
+pub struct StageClock {
+    names: &'static [&'static str],
+    seconds: Vec<f64>,
+}
+
+impl StageClock {
+    /// A clock for the stages `names`, in the order a step runs them.
+    pub fn new(names: &'static [&'static str]) -> Self {
+        StageClock {
+            names,
+            seconds: vec![0.0; names.len()],
+        }
+    }
+
+    /// Add the time since `since` to `stage`. Panics on a name the clock was not made
+    /// with (a programming error, caught by every run).
+    pub fn add(&mut self, stage: &str, since: Instant) {
+        let k = self
+            .names
+            .iter()
+            .position(|n| *n == stage)
+            .unwrap_or_else(|| panic!("no stage {stage:?} among {:?}", self.names));
+        self.seconds[k] += since.elapsed().as_secs_f64();
+    }
+
+    /// Seconds per stage, in the order of the names.
+    pub fn seconds(&self) -> &[f64] {
+        &self.seconds
+    }
+}
+
+/// Per-stage statistics over the ranks from each rank's `local` seconds (in the order of
+/// `names`), and the slowest rank's seconds per stage. Collective.
+pub fn stage_stats(
+    names: &[&'static str],
+    local: &[f64],
+    comm: &dyn Comm,
+) -> (
+    BTreeMap<&'static str, StageStats>,
+    BTreeMap<&'static str, f64>,
+) {
+    let all = comm.all_gather_f64(local);
+    let ranks = comm.size();
+    let mut stages = BTreeMap::new();
+    let mut slowest = BTreeMap::new();
+    for (k, name) in names.iter().enumerate() {
+        let v: Vec<f64> = (0..ranks).map(|r| all[r * names.len() + k]).collect();
+        let sum: f64 = v.iter().sum();
+        let max = v.iter().cloned().fold(0.0, f64::max);
+        let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
+        stages.insert(
+            *name,
+            StageStats {
+                sum_s: sum,
+                max_s: max,
+                min_s: min,
+                mean_s: sum / ranks as f64,
+            },
+        );
+        slowest.insert(*name, max);
+    }
+    (stages, slowest)
+}
+
+/// SIGTERM (stop) and SIGUSR1 (checkpoint and go on) flags, registered once per process.
+fn signal_flags() -> &'static [Arc<AtomicBool>; 2] {
+    static FLAGS: OnceLock<[Arc<AtomicBool>; 2]> = OnceLock::new();
+    FLAGS.get_or_init(|| {
+        let flags = [
+            Arc::new(AtomicBool::new(false)),
+            Arc::new(AtomicBool::new(false)),
+        ];
+        // Registration fails only for forbidden signals; these two are allowed.
+        let _ = signal_hook::flag::register(signal_hook::consts::SIGTERM, flags[0].clone());
+        let _ = signal_hook::flag::register(signal_hook::consts::SIGUSR1, flags[1].clone());
+        flags
+    })
+}
+
+/// What the ranks agreed on after a step (see [`Signals::agree`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Agreed {
+    /// SIGTERM reached a rank: write a checkpoint and stop.
+    pub stop: bool,
+    /// SIGUSR1 reached a rank, or a wall-clock checkpoint is due on one: write a
+    /// checkpoint and go on.
+    pub checkpoint: bool,
+}
+
+/// SIGTERM and SIGUSR1, as every time loop sees them: agreed by all ranks after every
+/// step, so that all ranks checkpoint and stop at the same step.
+pub struct Signals {
+    flags: &'static [Arc<AtomicBool>; 2],
+}
+
+impl Signals {
+    /// The process's handlers (installed on the first call).
+    pub fn install() -> Self {
+        Signals {
+            flags: signal_flags(),
+        }
+    }
+
+    /// Whether any rank received SIGTERM or SIGUSR1 since the last call, or has a
+    /// wall-clock checkpoint due (`wall_due`). One reduction over the ranks (none on one
+    /// rank). Collective.
+    pub fn agree(&self, comm: &dyn Comm, wall_due: bool) -> Agreed {
+        let term = self.flags[0].load(Ordering::Relaxed);
+        let usr1 = self.flags[1].swap(false, Ordering::Relaxed);
+        let local = (term as u8) | (usr1 as u8) << 1 | (wall_due as u8) << 2;
+        let agreed = if comm.size() > 1 {
+            comm.max_f64(local as f64) as u8
+        } else {
+            local
+        };
+        Agreed {
+            stop: agreed & 1 != 0,
+            checkpoint: agreed != 0,
+        }
+    }
+}
