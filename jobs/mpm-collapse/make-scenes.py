@@ -14,7 +14,8 @@ as in Stomakhin et al. 2013): pure FLIP rings and over-predicts the run-out abou
 (see the README's study). Points expanded beyond 1.15 times their initial volume (loosest over poured
 packing) carry no stress until recompressed. The column is released at t = 0 from a geostatic state (K0 = 1 - sin(phi)).
 
-Usage: make-scenes.py [OUTDIR]   (default: this folder)
+Usage: make-scenes.py [OUTDIR]   (default: runs/mpm-collapse/scenes; jobs/mpm-collapse keeps only
+the sweep a = 0.5 ... 8 and the two study scenes the tests run, which this script writes alike)
 """
 import math
 import os
@@ -116,7 +117,8 @@ max = 1.2
 
 
 def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else HERE
+    root = os.path.dirname(os.path.dirname(HERE))
+    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "runs", "mpm-collapse", "scenes")
     os.makedirs(out, exist_ok=True)
     files = {}
     for a in [0.5, 1, 2, 4, 8]:

@@ -9,9 +9,10 @@ cd "$(dirname "$0")/../.."
 ranks=${1:-1}
 shift || true
 cargo build --release --quiet
-python3 jobs/mpm-collapse/make-scenes.py >/dev/null
 out=runs/mpm-collapse
 mkdir -p "$out"
+# The study variants are written into the run folder, not committed.
+python3 jobs/mpm-collapse/make-scenes.py "$out/scenes" >/dev/null
 names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
   names=(a0.5 a1 a2 a4 a8 a0.5-rough a1-rough a2-rough a4-rough a8-rough
@@ -33,7 +34,7 @@ if [ ${#names[@]} -eq 0 ]; then
          a0.5-h2mm-ppc4-rough a1-h2mm-ppc4-rough a2-h2mm-ppc4-rough a4-h2mm-ppc4-rough)
 fi
 for name in "${names[@]}"; do
-  scene=jobs/mpm-collapse/$name.toml
+  scene=$out/scenes/$name.toml
   if [ "$ranks" -gt 1 ]; then
     mpirun --oversubscribe --bind-to none -np "$ranks" target/release/grainflow run \
       "$scene" --out "$out/$name" --quiet --threads 1 || true
