@@ -64,49 +64,9 @@ pub enum WaitPolicyArg {
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Run a scene; exits 2 when a check fails and 3 when the run goes unstable.
-    Run {
-        /// Scene file (TOML).
-        scene: PathBuf,
-        /// Output folder (default: runs/<scene name>).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Precision, overriding the scene's.
-        #[arg(long, value_enum)]
-        precision: Option<PrecisionArg>,
-        /// Worker threads (default: all cores, or RAYON_NUM_THREADS).
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Run to this step (at least 1), overriding the scene's length; any kind of scene.
-        #[arg(long, value_parser = whole_steps, conflicts_with = "end_time")]
-        steps: Option<u64>,
-        /// Run to this simulated time (s), overriding the scene's length; any kind of scene.
-        #[arg(long, value_name = "SECONDS", value_parser = positive_seconds)]
-        end_time: Option<f64>,
-        /// No progress output.
-        #[arg(long)]
-        quiet: bool,
-        /// Continue from a checkpoint (e.g. runs/NAME/checkpoint.h5), on any rank count.
-        #[arg(long, value_name = "CHECKPOINT")]
-        restart: Option<PathBuf>,
-        /// Device of the fluid solver, overriding the scene's `[run] backend`.
-        #[arg(long, value_enum)]
-        backend: Option<BackendArg>,
-        /// GPU population storage, overriding the scene's `[run] gpu_storage`: `f16` halves
-        /// memory and traffic (f32 arithmetic; needs `--backend gpu --precision f32`).
-        #[arg(long, value_enum)]
-        gpu_storage: Option<GpuStorageArg>,
-        /// CPU kernel, overriding the scene's `[run] kernel`: `in-place` (the AA pattern)
-        /// halves the memory; `auto` takes it where it measured faster.
-        #[arg(long, value_enum)]
-        kernel: Option<KernelArg>,
-        /// What idle worker threads do while the time loop runs: `active` keeps them
-        /// looking for work (as OMP_WAIT_POLICY=active; the coupled step about 2 % shorter on 2
-        /// cores), `passive` lets them sleep; `auto` is active unless the threads of the
-        /// ranks on this node outnumber its cores.
-        #[arg(long, value_enum, default_value = "auto")]
-        wait_policy: WaitPolicyArg,
-    },
+    /// Run a scene; exits 2 when a check fails, 3 when the run goes unstable, 4 when stopped
+    /// by SIGTERM and 64 on a command line that does not parse.
+    Run(RunArgs),
     /// Measure the stability limits `check` uses: the fluid's map over τ, lattice Mach
     /// number and operator (a shear layer and a cavity), the DEM's time-step factor λ and the
     /// MPM's Courant number. Writes jobs/stability/*.csv (rebuild to ship them).
@@ -143,4 +103,49 @@ fn whole_steps(text: &str) -> Result<u64, String> {
         Ok(n) => Ok(n),
         Err(e) => Err(format!("{text:?} is not a whole number of steps: {e}")),
     }
+}
+
+/// The arguments of `grainflow run`.
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Output folder (default: runs/<scene name>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Precision, overriding the scene's.
+    #[arg(long, value_enum)]
+    pub precision: Option<PrecisionArg>,
+    /// Worker threads (default: all cores, or RAYON_NUM_THREADS).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Run to this step (at least 1), overriding the scene's length; any kind of scene.
+    #[arg(long, value_parser = whole_steps, conflicts_with = "end_time")]
+    pub steps: Option<u64>,
+    /// Run to this simulated time (s), overriding the scene's length; any kind of scene.
+    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds)]
+    pub end_time: Option<f64>,
+    /// No progress output.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Continue from a checkpoint (e.g. runs/NAME/checkpoint.h5), on any rank count.
+    #[arg(long, value_name = "CHECKPOINT")]
+    pub restart: Option<PathBuf>,
+    /// Device of the fluid solver, overriding the scene's `[run] backend`.
+    #[arg(long, value_enum)]
+    pub backend: Option<BackendArg>,
+    /// GPU population storage, overriding the scene's `[run] gpu_storage`: `f16` halves
+    /// memory and traffic (f32 arithmetic; needs `--backend gpu --precision f32`).
+    #[arg(long, value_enum)]
+    pub gpu_storage: Option<GpuStorageArg>,
+    /// CPU kernel, overriding the scene's `[run] kernel`: `in-place` (the AA pattern)
+    /// halves the memory; `auto` takes it where it measured faster.
+    #[arg(long, value_enum)]
+    pub kernel: Option<KernelArg>,
+    /// What idle worker threads do while the time loop runs: `active` keeps them
+    /// looking for work (as OMP_WAIT_POLICY=active; the coupled step about 2 % shorter on 2
+    /// cores), `passive` lets them sleep; `auto` is active unless the threads of the
+    /// ranks on this node outnumber its cores.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub wait_policy: WaitPolicyArg,
 }

@@ -4,8 +4,11 @@ mod cli;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use cli::{BackendArg, Cli, Command, GpuStorageArg, KernelArg, PrecisionArg, WaitPolicyArg};
+use cli::{
+    BackendArg, Cli, Command, GpuStorageArg, KernelArg, PrecisionArg, RunArgs, WaitPolicyArg,
+};
 use decomposition::{launched_by_mpi, Comm, MpiComm, SingleProcess};
+use grainflow::driver::RunHeader;
 use grainflow::pool::{in_pool, WaitPolicy};
 use grainflow::run::{
     run_on, step_count, Backend, GpuStorage, Kernel, Precision, RunOptions, Status,
@@ -13,6 +16,13 @@ use grainflow::run::{
 use grainflow::scene;
 
 fn main() {
+    // Writing to a closed pipe (`grainflow check … | head`) ends the process quietly, as
+    // for other command-line tools, instead of panicking in println!.
+    #[cfg(unix)]
+    // SAFETY: restoring a signal's default disposition at start-up, before any thread.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     match real_main() {
         Ok(code) => std::process::exit(code),
         Err(e) => {
@@ -52,249 +62,232 @@ fn real_main() -> Result<i32> {
         }
     };
     match cli.command {
-        Command::Info => {
-            println!("grainflow {}", env!("CARGO_PKG_VERSION"));
-            println!(
-                "threads: {} (rayon; set --threads or RAYON_NUM_THREADS)",
-                rayon::current_num_threads()
-            );
-            println!(
-                "precisions: f32, f64 (CPU kernel, structure-of-arrays, fused pull stream-collide)"
-            );
-            let comm = communicator()?;
-            println!(
-                "ranks: {} (MPI slab decomposition along x; start with mpirun -np N)",
-                comm.size()
-            );
-            let adapters = grainflow::lbm::gpu::list_adapters();
-            if adapters.is_empty() {
-                println!(
-                    "GPU adapters: none found (install a Vulkan driver; `--backend gpu` needs one)"
-                );
-            } else {
-                println!("GPU adapters (wgpu; `--backend gpu` picks the first discrete GPU, or GRAINFLOW_GPU_ADAPTER=i):");
+        Command::Info => info(),
+        Command::Check { scene } => check(&scene),
+        Command::StabilityMap { out, threads } => stability_map(out, threads),
+        Command::Run(args) => run(args),
+    }
+}
+
+/// `grainflow info`: version, threads, ranks and the GPU adapters.
+fn info() -> Result<i32> {
+    println!("grainflow {}", env!("CARGO_PKG_VERSION"));
+    println!(
+        "threads: {} (rayon; set --threads or RAYON_NUM_THREADS)",
+        rayon::current_num_threads()
+    );
+    println!("precisions: f32, f64 (CPU kernel, structure-of-arrays, fused pull stream-collide)");
+    let comm = communicator()?;
+    println!(
+        "ranks: {} (MPI slab decomposition along x; start with mpirun -np N)",
+        comm.size()
+    );
+    let adapters = grainflow::lbm::gpu::list_adapters();
+    if adapters.is_empty() {
+        println!("GPU adapters: none found (install a Vulkan driver; `--backend gpu` needs one)");
+    } else {
+        println!("GPU adapters (wgpu; `--backend gpu` picks the first discrete GPU, or GRAINFLOW_GPU_ADAPTER=i):");
+    }
+    for (i, a) in adapters.iter().enumerate() {
+        println!(
+            "  [{i}] {} — {}, {}, driver {}; f64: {}, f16: {}; largest storage binding {} MiB, buffer {} MiB, {} storage buffers per stage",
+            a.name,
+            a.backend,
+            a.device_type,
+            a.driver.trim(),
+            if a.f64 { "yes" } else { "no (f32 only)" },
+            if a.f16 { "yes" } else { "no" },
+            a.max_storage_binding >> 20,
+            a.max_buffer >> 20,
+            a.max_storage_buffers
+        );
+    }
+    Ok(0)
+}
+
+/// `grainflow check SCENE`: validate any kind of scene and print what a run will use.
+fn check(scene: &std::path::Path) -> Result<i32> {
+    match scene::load_any(scene)? {
+        scene::AnyScene::Fluid(s) => print_check(&s),
+        scene::AnyScene::Grains(g) => {
+            println!("{}: valid grains scene", g.path.display());
+            println!("  title: {}", g.scene.title);
+            println!("  walls: {}", g.scene.grains.walls.len());
+            println!("  stability: {}", dem_verdict(g.lambda()));
+            for w in &g.warnings {
+                println!("  warning: {w}");
             }
-            for (i, a) in adapters.iter().enumerate() {
-                println!(
-                    "  [{i}] {} — {}, {}, driver {}; f64: {}, f16: {}; largest storage binding {} MiB, buffer {} MiB, {} storage buffers per stage",
-                    a.name,
-                    a.backend,
-                    a.device_type,
-                    a.driver.trim(),
-                    if a.f64 { "yes" } else { "no (f32 only)" },
-                    if a.f16 { "yes" } else { "no" },
-                    a.max_storage_binding >> 20,
-                    a.max_buffer >> 20,
-                    a.max_storage_buffers
-                );
-            }
-            Ok(0)
         }
-        Command::Check { scene } => {
-            match scene::load_any(&scene)? {
-                scene::AnyScene::Fluid(s) => print_check(&s),
-                scene::AnyScene::Grains(g) => {
-                    println!("{}: valid grains scene", g.path.display());
-                    println!("  title: {}", g.scene.title);
-                    println!("  walls: {}", g.scene.grains.walls.len());
-                    println!("  stability: {}", dem_verdict(g.lambda()));
-                    for w in &g.warnings {
-                        println!("  warning: {w}");
-                    }
-                }
-                scene::AnyScene::Mpm(m) => {
-                    let spec = m.setup.spec;
-                    println!("{}: valid MPM scene", m.path.display());
-                    println!("  title: {}", m.scene.title);
-                    println!(
-                        "  grid: {} × {} cells of {} m; {:?} shape functions, {:?} update",
-                        spec.nx, spec.ny, spec.h, m.setup.shape, m.setup.scheme
-                    );
-                    println!("  material points: {}", m.points.len());
-                    println!(
-                        "  time step: {:.4e} s (CFL limit {:.4e} s)",
-                        m.setup.dt, m.critical_dt
-                    );
-                    let c = m.setup.dt / m.critical_dt;
-                    let verdict = match grainflow::stability::mpm::courant_limit(
-                        grainflow::stability::MPM_CSV,
-                    ) {
-                        Some(l) if c <= l => format!(
-                            "Courant number {c:.3}: inside the measured stable range (stable up to {l}, jobs/stability/mpm-courant.csv)"
-                        ),
-                        Some(l) => format!(
-                            "Courant number {c:.3}: likely unstable (measured stable only up to {l}): shorten the time step"
-                        ),
-                        None => format!("Courant number {c:.3}: no measured limit"),
-                    };
-                    println!("  stability: {verdict}");
-                    for w in &m.warnings {
-                        println!("  warning: {w}");
-                    }
-                }
-            }
-            Ok(0)
-        }
-        Command::StabilityMap { out, threads } => {
-            if let Some(t) = threads {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build_global()
-                    .context("setting up the thread pool")?;
-            }
-            let dir = out.unwrap_or_else(|| std::path::PathBuf::from("jobs/stability"));
-            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-            let mpm = match scene::load_any(std::path::Path::new("tests/scenes/mpm_collapse.toml"))?
-            {
-                scene::AnyScene::Mpm(m) => m,
-                _ => anyhow::bail!("tests/scenes/mpm_collapse.toml is not an MPM scene"),
-            };
-            let t = std::time::Instant::now();
-            let summary = grainflow::stability::write_maps(&dir, &mpm)
-                .with_context(|| format!("writing the maps into {}", dir.display()))?;
-            print!("{summary}");
+        scene::AnyScene::Mpm(m) => {
+            let spec = m.setup.spec;
+            println!("{}: valid MPM scene", m.path.display());
+            println!("  title: {}", m.scene.title);
             println!(
-                "wrote {}/lbm-map.csv, dem-lambda.csv, mpm-courant.csv in {:.0} s",
-                dir.display(),
-                t.elapsed().as_secs_f64()
+                "  grid: {} × {} cells of {} m; {:?} shape functions, {:?} update",
+                spec.nx, spec.ny, spec.h, m.setup.shape, m.setup.scheme
             );
-            Ok(0)
-        }
-        Command::Run {
-            scene,
-            out,
-            precision,
-            threads,
-            steps,
-            end_time,
-            quiet,
-            restart,
-            backend,
-            gpu_storage,
-            kernel,
-            wait_policy,
-        } => {
-            let comm = communicator()?;
-            let comm = comm.as_ref();
-            if let Some(t) = threads {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build_global()
-                    .context("setting up the thread pool")?;
-            }
-            let spin = match wait_policy {
-                WaitPolicyArg::Auto => WaitPolicy::Auto,
-                WaitPolicyArg::Active => WaitPolicy::Active,
-                WaitPolicyArg::Passive => WaitPolicy::Passive,
-            }
-            .spins_here(comm);
-            let out = out.unwrap_or_else(|| default_out(&scene));
-            let s = match scene::load_any(&scene)? {
-                scene::AnyScene::Fluid(s) => *s,
-                scene::AnyScene::Grains(g) => {
-                    if precision.is_some() || backend.is_some() {
-                        anyhow::bail!(
-                            "--precision and --backend apply to the fluid; {} is a grains \
-                             scene (DEM in f64 on the CPU)",
-                            scene.display()
-                        );
-                    }
-                    let mut opts = RunOptions::particles(out, !quiet, restart);
-                    (opts.steps, opts.end_time_s) = (steps, end_time);
-                    return in_pool(comm, spin, || run_grain_scene(&g, &opts, comm));
-                }
-                scene::AnyScene::Mpm(m) => {
-                    if precision.is_some() || backend.is_some() {
-                        anyhow::bail!(
-                            "--precision and --backend apply to the fluid; {} is an MPM \
-                             scene (f64 on the CPU)",
-                            scene.display()
-                        );
-                    }
-                    let mut opts = RunOptions::particles(out, !quiet, restart);
-                    (opts.steps, opts.end_time_s) = (steps, end_time);
-                    return in_pool(comm, spin, || run_mpm_scene(&m, &opts, comm));
-                }
-            };
-            for w in &s.warnings {
-                eprintln!("warning: {w}");
-            }
-            let opts = RunOptions {
-                out_dir: out.clone(),
-                precision: precision.map(|p| match p {
-                    PrecisionArg::F32 => Precision::F32,
-                    PrecisionArg::F64 => Precision::F64,
-                }),
-                steps,
-                end_time_s: end_time,
-                progress: !quiet,
-                restart,
-                backend: backend.map(|b| match b {
-                    BackendArg::Cpu => Backend::Cpu,
-                    BackendArg::Gpu => Backend::Gpu,
-                }),
-                gpu_storage: gpu_storage.map(|g| match g {
-                    GpuStorageArg::Native => GpuStorage::Native,
-                    GpuStorageArg::F16 => GpuStorage::F16,
-                }),
-                kernel: kernel.map(|k| match k {
-                    KernelArg::Auto => Kernel::Auto,
-                    KernelArg::TwoArray => Kernel::TwoArray,
-                    KernelArg::InPlace => Kernel::InPlace,
-                }),
-            };
-            let root = comm.is_root();
-            if root {
-                eprintln!(
-                    "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} rank(s) × {} threads{}",
-                    scene.display(),
-                    step_count(&s, steps, end_time),
-                    s.units.tau,
-                    s.units.mach,
-                    s.units.reynolds,
-                    comm.size(),
-                    rayon::current_num_threads(),
-                    if spin { " (idle workers active)" } else { "" }
-                );
-            }
-            let summary = in_pool(comm, spin, || run_on(&s, &opts, comm))?;
-            if !root {
-                return Ok(exit_code(summary.run.status));
-            }
+            println!("  material points: {}", m.points.len());
             println!(
-                "{} steps in {:.2} s: {:.1} MLUPS (kernel {:.1})",
-                summary.run.steps, summary.run.wall_time_s, summary.mlups, summary.kernel_mlups
+                "  time step: {:.4e} s (CFL limit {:.4e} s)",
+                m.setup.dt, m.critical_dt
             );
-            for (k, v) in &summary.run.results {
-                println!("  {k} = {v:.6e}");
-            }
-            print_checks(&summary.run.checks);
-            println!(
-                "output: {}  (summary.json, fields.h5 + fields.xdmf, pictures/, probe_*.csv)",
-                out.display()
-            );
-            match summary.run.status {
-                Status::Ok => {}
-                Status::ChecksFailed => eprintln!("error: at least one check failed"),
-                Status::Unstable => {
-                    eprintln!(
-                        "error: {}",
-                        summary.run.error.as_deref().unwrap_or("unstable")
-                    );
-                    eprintln!(
-                        "the output written so far is kept in {}, including the last good state",
-                        out.display()
-                    );
-                }
-                Status::Interrupted => eprintln!(
-                    "stopped by SIGTERM at step {}; continue with --restart {}",
-                    summary.run.steps,
-                    out.join("checkpoint.h5").display()
+            let c = m.setup.dt / m.critical_dt;
+            let verdict = match grainflow::stability::mpm::courant_limit(
+                grainflow::stability::MPM_CSV,
+            ) {
+                Some(l) if c <= l => format!(
+                    "Courant number {c:.3}: inside the measured stable range (stable up to {l}, jobs/stability/mpm-courant.csv)"
                 ),
+                Some(l) => format!(
+                    "Courant number {c:.3}: likely unstable (measured stable only up to {l}): shorten the time step"
+                ),
+                None => format!("Courant number {c:.3}: no measured limit"),
+            };
+            println!("  stability: {verdict}");
+            for w in &m.warnings {
+                println!("  warning: {w}");
             }
-            Ok(exit_code(summary.run.status))
         }
     }
+    Ok(0)
+}
+
+/// `grainflow stability-map`: measure the stability limits and write the maps.
+fn stability_map(out: Option<std::path::PathBuf>, threads: Option<usize>) -> Result<i32> {
+    if let Some(t) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("setting up the thread pool")?;
+    }
+    let dir = out.unwrap_or_else(|| std::path::PathBuf::from("jobs/stability"));
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mpm = match scene::load_any(std::path::Path::new("tests/scenes/mpm_collapse.toml"))? {
+        scene::AnyScene::Mpm(m) => m,
+        _ => anyhow::bail!("tests/scenes/mpm_collapse.toml is not an MPM scene"),
+    };
+    let t = std::time::Instant::now();
+    let summary = grainflow::stability::write_maps(&dir, &mpm)
+        .with_context(|| format!("writing the maps into {}", dir.display()))?;
+    print!("{summary}");
+    println!(
+        "wrote {}/lbm-map.csv, dem-lambda.csv, mpm-courant.csv in {:.0} s",
+        dir.display(),
+        t.elapsed().as_secs_f64()
+    );
+    Ok(0)
+}
+
+/// `grainflow run`: any kind of scene, on every rank of the launch.
+fn run(args: RunArgs) -> Result<i32> {
+    let RunArgs {
+        scene,
+        out,
+        precision,
+        threads,
+        steps,
+        end_time,
+        quiet,
+        restart,
+        backend,
+        gpu_storage,
+        kernel,
+        wait_policy,
+    } = args;
+    let comm = communicator()?;
+    let comm = comm.as_ref();
+    if let Some(t) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("setting up the thread pool")?;
+    }
+    let spin = match wait_policy {
+        WaitPolicyArg::Auto => WaitPolicy::Auto,
+        WaitPolicyArg::Active => WaitPolicy::Active,
+        WaitPolicyArg::Passive => WaitPolicy::Passive,
+    }
+    .spins_here(comm);
+    let opts = RunOptions {
+        out_dir: out.unwrap_or_else(|| default_out(&scene)),
+        precision: precision.map(|p| match p {
+            PrecisionArg::F32 => Precision::F32,
+            PrecisionArg::F64 => Precision::F64,
+        }),
+        steps,
+        end_time_s: end_time,
+        progress: !quiet,
+        restart,
+        backend: backend.map(|b| match b {
+            BackendArg::Cpu => Backend::Cpu,
+            BackendArg::Gpu => Backend::Gpu,
+        }),
+        gpu_storage: gpu_storage.map(|g| match g {
+            GpuStorageArg::Native => GpuStorage::Native,
+            GpuStorageArg::F16 => GpuStorage::F16,
+        }),
+        kernel: kernel.map(|k| match k {
+            KernelArg::Auto => Kernel::Auto,
+            KernelArg::TwoArray => Kernel::TwoArray,
+            KernelArg::InPlace => Kernel::InPlace,
+        }),
+    };
+    let fluid_only = |kind: &str| {
+        if opts.precision.is_some() || opts.backend.is_some() {
+            anyhow::bail!(
+                "--precision and --backend apply to the fluid; {} is {kind} scene (f64 on \
+                 the CPU)",
+                scene.display()
+            );
+        }
+        Ok(())
+    };
+    match scene::load_any(&scene)? {
+        scene::AnyScene::Fluid(s) => in_pool(comm, spin, || run_fluid_scene(&s, &opts, spin, comm)),
+        scene::AnyScene::Grains(g) => {
+            fluid_only("a grains")?;
+            in_pool(comm, spin, || run_grain_scene(&g, &opts, comm))
+        }
+        scene::AnyScene::Mpm(m) => {
+            fluid_only("an MPM")?;
+            in_pool(comm, spin, || run_mpm_scene(&m, &opts, comm))
+        }
+    }
+}
+
+/// Run a fluid (or coupled) scene and report its end.
+fn run_fluid_scene(
+    s: &scene::ValidScene,
+    opts: &RunOptions,
+    spin: bool,
+    comm: &dyn decomposition::Comm,
+) -> Result<i32> {
+    if comm.is_root() {
+        for w in &s.warnings {
+            eprintln!("warning: {w}");
+        }
+        eprintln!(
+            "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} rank(s) × {} threads{}",
+            s.path.display(),
+            step_count(s, opts.steps, opts.end_time_s),
+            s.units.tau,
+            s.units.mach,
+            s.units.reynolds,
+            comm.size(),
+            rayon::current_num_threads(),
+            if spin { " (idle workers active)" } else { "" }
+        );
+    }
+    let summary = run_on(s, opts, comm)?;
+    if !comm.is_root() {
+        return Ok(exit_code(summary.run.status));
+    }
+    println!(
+        "{} steps in {:.2} s: {:.1} MLUPS (kernel {:.1})",
+        summary.run.steps, summary.run.wall_time_s, summary.mlups, summary.kernel_mlups
+    );
+    let files = "fields.h5 + fields.xdmf, probe_*.csv";
+    Ok(report(&summary.run, files, &opts.out_dir))
 }
 
 /// What a grain or MPM run's first log line adds when its idle workers look for work (it
@@ -360,52 +353,41 @@ fn run_grain_scene(
         summary.grain_steps_per_s / 1e6,
         summary.migrated
     );
-    let outcome = Outcome {
-        results: &summary.run.results,
-        checks: &summary.run.checks,
-        files: "grains.h5 + grains.xdmf",
-        error: summary.run.error.as_deref(),
-        status: summary.run.status,
-        steps: summary.run.steps,
-    };
-    Ok(report(&outcome, &opts.out_dir))
+    Ok(report(
+        &summary.run,
+        "grains.h5 + grains.xdmf",
+        &opts.out_dir,
+    ))
 }
 
-/// What a particle run (grains or MPM) reports at its end.
-struct Outcome<'a> {
-    results: &'a grainflow::analysis::Results,
-    checks: &'a [grainflow::analysis::checks::CheckOutcome],
-    files: &'a str,
-    error: Option<&'a str>,
-    status: Status,
-    steps: u64,
-}
-
-/// Print results, checks, the output folder, and any error or restart hint; returns the
-/// exit code.
-fn report(o: &Outcome, out: &std::path::Path) -> i32 {
-    for (k, v) in o.results {
+/// Print a run's results, checks, output folder (`files` are what it wrote besides
+/// summary.json and pictures/) and any error or restart hint; returns the exit code.
+fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
+    for (k, v) in &run.results {
         println!("  {k} = {v:.6e}");
     }
-    print_checks(o.checks);
+    print_checks(&run.checks);
     println!(
-        "output: {}  (summary.json, {}, pictures/)",
-        out.display(),
-        o.files
+        "output: {}  (summary.json, {files}, pictures/)",
+        out.display()
     );
-    if let Some(e) = o.error {
+    if let Some(e) = &run.error {
         eprintln!("error: {e}");
     }
-    match o.status {
+    match run.status {
+        Status::Ok => {}
         Status::ChecksFailed => eprintln!("error: at least one check failed"),
+        Status::Unstable => eprintln!(
+            "the output written so far is kept in {}, including the last good state",
+            out.display()
+        ),
         Status::Interrupted => eprintln!(
             "stopped by SIGTERM at step {}; continue with --restart {}",
-            o.steps,
+            run.steps,
             out.join("checkpoint.h5").display()
         ),
-        _ => {}
     }
-    exit_code(o.status)
+    exit_code(run.status)
 }
 
 /// One line per check: PASS/FAIL, the quantity, its value and the bounds.
@@ -579,13 +561,5 @@ fn run_mpm_scene(
         summary.point_steps_per_s / 1e6,
         summary.migrated
     );
-    let outcome = Outcome {
-        results: &summary.run.results,
-        checks: &summary.run.checks,
-        files: "mpm.h5 + mpm.xdmf",
-        error: summary.run.error.as_deref(),
-        status: summary.run.status,
-        steps: summary.run.steps,
-    };
-    Ok(report(&outcome, &opts.out_dir))
+    Ok(report(&summary.run, "mpm.h5 + mpm.xdmf", &opts.out_dir))
 }
