@@ -10,15 +10,19 @@
 //!   neighbour, non-blocking, with work overlapped while the messages travel.
 //! * [`swap_neighbours`], [`swap_neighbours_varlen`]: one message per neighbour for
 //!   particle solvers (ghosts, migration, MPM grid strips).
+//! * [`PackRows`], [`Record`]: how a grain, a material point or a ghost's state becomes
+//!   the f64 words of a message (and of a checkpoint row), and back.
 
 mod comm;
 mod halo;
 mod mpi_comm;
 mod neighbours;
+mod pack;
 mod slab;
 
 pub use comm::{ordered_sum, Comm, Incoming, Outgoing, SingleProcess};
 pub use halo::{Side, SlabHalo};
 pub use mpi_comm::{launched_by_mpi, MpiComm, RawComm};
 pub use neighbours::{swap_neighbours, swap_neighbours_varlen};
+pub use pack::{pack_rows, unpack_rows, PackRows, Record};
 pub use slab::{PartitionError, Slab, SlabPartition};

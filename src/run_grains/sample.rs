@@ -3,6 +3,7 @@
 
 use crate::error::RunError;
 use decomposition::Comm;
+use decomposition::PackRows;
 use dem::parallel::balanced_bounds;
 use dem::sample::{load_csv, random_sequential_addition};
 use dem::{DemError, DemSystem, Grains, SlabDem};
@@ -10,16 +11,16 @@ use scene::{size_distribution, SampleSpec, ValidGrainScene};
 
 /// Every rank's owned grains, gathered on every rank and sorted by id (collective).
 pub fn gather_grains(sys: &DemSystem, comm: &dyn Comm) -> Grains {
-    let mut local = Vec::with_capacity(sys.owned() * Grains::PACKED);
+    let mut local = Vec::with_capacity(sys.owned() * Grains::WORDS);
     for i in 0..sys.owned() {
-        sys.grains.pack(i, &mut local);
+        sys.grains.pack_row(i, &mut local);
     }
     let all = comm.all_gather_f64(&local);
-    let mut rows: Vec<&[f64]> = all.chunks_exact(Grains::PACKED).collect();
+    let mut rows: Vec<&[f64]> = all.chunks_exact(Grains::WORDS).collect();
     rows.sort_by_key(|p| p[9].to_bits());
     let mut g = Grains::default();
     for p in rows {
-        g.push_packed(p);
+        g.push_row(p);
     }
     g
 }
@@ -122,13 +123,13 @@ pub(crate) fn prepare(scene: &ValidGrainScene, comm: &dyn Comm) -> Result<(Grain
         if st.trim_above_m.is_some_and(|h| settled.y[i] > h) {
             continue;
         }
-        let mut p = Vec::with_capacity(Grains::PACKED);
-        settled.pack(i, &mut p);
+        let mut p = Vec::with_capacity(Grains::WORDS);
+        settled.pack_row(i, &mut p);
         p[2] = 0.0;
         p[3] = 0.0;
         p[5] = 0.0;
         p[9] = f64::from_bits(g.len() as u64);
-        g.push_packed(&p);
+        g.push_row(&p);
     }
     Ok((g, steps))
 }

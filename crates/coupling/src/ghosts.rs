@@ -5,10 +5,8 @@
 //! they came from (see `sums.rs`). One message per neighbour per phase, across a periodic x
 //! face too.
 
-use decomposition::{swap_neighbours_varlen, Comm, SlabPartition};
+use decomposition::{swap_neighbours_varlen, unpack_rows, Comm, Record, SlabPartition};
 
-/// Values per ghost: id (bits), x, y, r, m, vx, vy, ω (SI).
-pub const GHOST: usize = 8;
 /// Message tags (distinct from the lattice's, the DEM's and the MPM's).
 const TAG_STATE: (u16, u16) = (400, 410);
 const TAG_LOADS: (u16, u16) = (420, 430);
@@ -30,7 +28,10 @@ pub struct GhostState {
     pub omega: f64,
 }
 
-impl GhostState {
+/// A ghost's state travels as 8 words: id (bits), x, y, r, m, vx, vy, ω (SI).
+impl Record for GhostState {
+    const WORDS: usize = 8;
+
     fn pack(&self, out: &mut Vec<f64>) {
         out.extend_from_slice(&[
             f64::from_bits(self.id),
@@ -151,9 +152,9 @@ impl GrainHalo {
         self.wait_s += wait;
         let mut ghosts = Vec::new();
         for (side, msg) in got.iter().enumerate() {
-            for p in msg.chunks_exact(GHOST) {
-                ghosts.push((GhostState::unpack(p), side));
-            }
+            let mut states: Vec<GhostState> = Vec::new();
+            unpack_rows(&mut states, msg);
+            ghosts.extend(states.into_iter().map(|g| (g, side)));
         }
         ghosts
     }

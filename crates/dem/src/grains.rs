@@ -1,5 +1,7 @@
 //! Grain state, structure of arrays.
 
+use decomposition::PackRows;
+
 /// The grains of one rank: every per-grain quantity in its own array, index-aligned.
 #[derive(Debug, Clone, Default)]
 pub struct Grains {
@@ -124,36 +126,7 @@ impl Grains {
         self.id.retain(|_| *k.next().unwrap_or(&true));
     }
 
-    /// Values per grain in [`Grains::pack`].
-    pub const PACKED: usize = 10;
-
-    /// Append grain `i`'s state (everything but the forces, which are recomputed after a
-    /// move) to `out` as [`Grains::PACKED`] values; the id travels as its bit pattern.
-    pub fn pack(&self, i: usize, out: &mut Vec<f64>) {
-        out.extend_from_slice(&[
-            self.x[i],
-            self.y[i],
-            self.vx[i],
-            self.vy[i],
-            self.theta[i],
-            self.omega[i],
-            self.r[i],
-            self.m[i],
-            self.inv_inertia[i],
-            f64::from_bits(self.id[i]),
-        ]);
-    }
-
-    /// Append a grain packed by [`Grains::pack`], forces zero.
-    pub fn push_packed(&mut self, p: &[f64]) {
-        // reals_mut: the 9 packed values in order, then the three forces.
-        for (k, v) in self.reals_mut().into_iter().enumerate() {
-            v.push(if k < Self::PACKED - 1 { p[k] } else { 0.0 });
-        }
-        self.id.push(p[9].to_bits());
-    }
-
-    /// Every f64 array: the packed ones in [`Grains::pack`] order, then fx, fy, torque.
+    /// Every f64 array: the packed ones in [`PackRows::pack_row`] order, then fx, fy, torque.
     fn reals_mut(&mut self) -> [&mut Vec<f64>; 12] {
         [
             &mut self.x,
@@ -184,5 +157,35 @@ impl Grains {
             p[1] += self.m[i] * self.vy[i];
         }
         p
+    }
+}
+
+/// A grain travels (migration, ghosts, checkpoints) as 10 words: everything but the forces,
+/// which are recomputed after a move; the id as its bit pattern.
+impl PackRows for Grains {
+    const WORDS: usize = 10;
+
+    fn pack_row(&self, i: usize, out: &mut Vec<f64>) {
+        out.extend_from_slice(&[
+            self.x[i],
+            self.y[i],
+            self.vx[i],
+            self.vy[i],
+            self.theta[i],
+            self.omega[i],
+            self.r[i],
+            self.m[i],
+            self.inv_inertia[i],
+            f64::from_bits(self.id[i]),
+        ]);
+    }
+
+    /// Forces zero.
+    fn push_row(&mut self, p: &[f64]) {
+        // reals_mut: the 9 packed values in order, then the three forces.
+        for (k, v) in self.reals_mut().into_iter().enumerate() {
+            v.push(if k < Self::WORDS - 1 { p[k] } else { 0.0 });
+        }
+        self.id.push(p[9].to_bits());
     }
 }

@@ -17,6 +17,7 @@ use super::contact::DemError;
 use super::grains::Grains;
 use super::system::{DemSetup, DemSystem, HistoryMap, WALL_KEY};
 use decomposition::Comm;
+use decomposition::PackRows;
 
 /// Values sent per ghost every step: x, y, vx, vy, ω.
 const FORWARD: usize = 5;
@@ -254,9 +255,9 @@ impl SlabDem {
             }
         }
         let msgs = send.clone().map(|list| {
-            let mut out = Vec::with_capacity(list.len() * Grains::PACKED);
+            let mut out = Vec::with_capacity(list.len() * Grains::WORDS);
             for &i in &list {
-                g.pack(i as usize, &mut out);
+                g.pack_row(i as usize, &mut out);
             }
             join(&[&out, &[], &[]])
         });
@@ -264,10 +265,10 @@ impl SlabDem {
         let sys = &mut self.system;
         for (side, msg) in got.iter().enumerate() {
             let [grains, _, _] = split(msg);
-            for p in grains.chunks_exact(Grains::PACKED) {
-                sys.grains.push_packed(p);
+            for p in grains.chunks_exact(Grains::WORDS) {
+                sys.grains.push_row(p);
             }
-            self.recv[side] = grains.len() / Grains::PACKED;
+            self.recv[side] = grains.len() / Grains::WORDS;
         }
         // 3. The list; the spatial sort renumbers owned grains, so follow it.
         let order = sys.rebuild_from(&live, DemSystem::skin_for(self.rmax), self.rmax);

@@ -10,6 +10,7 @@ use super::checkpoint::{open_checked, write_atomically, write_header, CheckedFil
 use super::h5par::{write_rows, Access};
 use super::OutputError;
 use decomposition::Comm;
+use decomposition::PackRows;
 use dem::system::HistoryMap;
 use dem::walls::WallStates;
 use dem::{Grains, SlabDem};
@@ -20,7 +21,7 @@ pub const FORMAT: &str = "grainflow-grains-checkpoint";
 /// Version of the layout below.
 pub const FORMAT_VERSION: u32 = 1;
 /// Values per grain row: [`Grains::pack`] then fx, fy, torque.
-const ROW: usize = Grains::PACKED + 3;
+const ROW: usize = Grains::WORDS + 3;
 
 /// Counters of a grains run that a restart needs besides the grains.
 #[derive(Debug, Clone, PartialEq)]
@@ -98,7 +99,7 @@ pub fn write_dem(
     let g = &sys.grains;
     let mut rows = Vec::with_capacity(sys.owned() * ROW);
     for i in 0..sys.owned() {
-        g.pack(i, &mut rows);
+        g.pack_row(i, &mut rows);
         rows.extend_from_slice(&[g.fx[i], g.fy[i], g.torque[i]]);
     }
     // Each contact once: a pair by the owner of its smaller-id grain, a wall contact by the
@@ -161,7 +162,7 @@ pub fn read_dem(
     sorted.sort_by_key(|r| r[9].to_bits());
     let mut grains = Grains::default();
     for r in sorted {
-        grains.push_packed(&r[..Grains::PACKED]);
+        grains.push_row(&r[..Grains::WORDS]);
         let i = grains.len() - 1;
         grains.fx[i] = r[10];
         grains.fy[i] = r[11];

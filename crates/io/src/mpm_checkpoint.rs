@@ -7,7 +7,7 @@ use super::checkpoint::{open_checked, write_atomically, write_header};
 use super::h5par::{write_rows, Access};
 use super::OutputError;
 use decomposition::Comm;
-use mpm::points::PACKED;
+use decomposition::PackRows;
 use mpm::{MpmSystem, Points};
 use std::path::Path;
 
@@ -47,9 +47,9 @@ pub fn write(
     run: &MpmRunState,
 ) -> Result<(), OutputError> {
     let p = &sys.points;
-    let mut rows = Vec::with_capacity(p.len() * PACKED);
+    let mut rows = Vec::with_capacity(p.len() * Points::WORDS);
     for i in 0..p.len() {
-        p.pack(i, &mut rows);
+        p.pack_row(i, &mut rows);
     }
     let fill = |file: &hdf5::File, access: Access| -> hdf5::Result<()> {
         write_header(
@@ -64,7 +64,7 @@ pub fn write(
             ],
         )?;
         let g = file.create_group("mpm")?;
-        write_rows(&g, "points", &rows, PACKED, comm, access)?;
+        write_rows(&g, "points", &rows, Points::WORDS, comm, access)?;
         Ok(())
     };
     write_atomically(path, comm, &fill)
@@ -74,12 +74,12 @@ pub fn write(
 pub fn read(path: &Path, comm: &dyn Comm) -> Result<RestoredMpm, OutputError> {
     let c = open_checked(path, comm, (FORMAT, FORMAT_VERSION), "an MPM")?;
     let (u, f) = (|n: &str| c.u64(n), |n: &str| c.f64(n));
-    let rows = c.rows("mpm/points", PACKED)?;
-    let mut sorted: Vec<&[f64]> = rows.chunks_exact(PACKED).collect();
+    let rows = c.rows("mpm/points", Points::WORDS)?;
+    let mut sorted: Vec<&[f64]> = rows.chunks_exact(Points::WORDS).collect();
     sorted.sort_by_key(|r| r[0].to_bits());
     let mut points = Points::default();
     for r in sorted {
-        points.push_packed(r);
+        points.push_row(r);
     }
     Ok(RestoredMpm {
         run: MpmRunState {

@@ -3,6 +3,8 @@
 //! `[f64; 4]`), so a sweep reads each field as one contiguous stream and no point owns a
 //! heap object.
 
+use decomposition::PackRows;
+
 /// The material points of one rank.
 #[derive(Debug, Clone, Default)]
 pub struct Points {
@@ -33,9 +35,6 @@ pub struct Points {
     /// Index of the point's material in the scene's material list.
     pub material: Vec<u16>,
 }
-
-/// Number of f64 words one point packs into (see [`Points::pack`]).
-pub const PACKED: usize = 25;
 
 impl Points {
     /// Number of points.
@@ -78,38 +77,6 @@ impl Points {
     pub fn volume(&self, i: usize) -> f64 {
         let f = self.defgrad[i];
         self.vol0[i] * (f[0] * f[3] - f[1] * f[2])
-    }
-
-    /// Append point `i`'s full state to `out` as [`PACKED`] words (ids and material as
-    /// exact integer bit patterns), for migration and checkpoints.
-    pub fn pack(&self, i: usize, out: &mut Vec<f64>) {
-        out.push(f64::from_bits(self.id[i]));
-        out.extend_from_slice(&self.pos[i]);
-        out.extend_from_slice(&self.vel[i]);
-        out.extend_from_slice(&self.affine[i]);
-        out.extend_from_slice(&[self.mass[i], self.vol0[i], self.half0[i]]);
-        out.extend_from_slice(&self.stress[i]);
-        out.extend_from_slice(&self.strain[i]);
-        out.extend_from_slice(&self.defgrad[i]);
-        out.push(self.eps_p[i]);
-        out.push(f64::from_bits(self.material[i] as u64));
-    }
-
-    /// Append a point from [`PACKED`] words written by [`Points::pack`].
-    pub fn push_packed(&mut self, p: &[f64]) {
-        assert_eq!(p.len(), PACKED, "packed point has {} words", p.len());
-        self.id.push(p[0].to_bits());
-        self.pos.push([p[1], p[2]]);
-        self.vel.push([p[3], p[4]]);
-        self.affine.push([p[5], p[6], p[7], p[8]]);
-        self.mass.push(p[9]);
-        self.vol0.push(p[10]);
-        self.half0.push(p[11]);
-        self.stress.push([p[12], p[13], p[14], p[15]]);
-        self.strain.push([p[16], p[17], p[18]]);
-        self.defgrad.push([p[19], p[20], p[21], p[22]]);
-        self.eps_p.push(p[23]);
-        self.material.push(p[24].to_bits() as u16);
     }
 
     /// Keep only the points with `keep[i]`, preserving their order.
@@ -172,6 +139,41 @@ pub struct PermuteScratch {
     v4: Vec<[f64; 4]>,
 }
 
+/// A point travels (migration, checkpoints) as its full state: ids and material as exact
+/// integer bit patterns.
+impl PackRows for Points {
+    const WORDS: usize = 25;
+
+    fn pack_row(&self, i: usize, out: &mut Vec<f64>) {
+        out.push(f64::from_bits(self.id[i]));
+        out.extend_from_slice(&self.pos[i]);
+        out.extend_from_slice(&self.vel[i]);
+        out.extend_from_slice(&self.affine[i]);
+        out.extend_from_slice(&[self.mass[i], self.vol0[i], self.half0[i]]);
+        out.extend_from_slice(&self.stress[i]);
+        out.extend_from_slice(&self.strain[i]);
+        out.extend_from_slice(&self.defgrad[i]);
+        out.push(self.eps_p[i]);
+        out.push(f64::from_bits(self.material[i] as u64));
+    }
+
+    fn push_row(&mut self, p: &[f64]) {
+        assert_eq!(p.len(), Self::WORDS, "packed point has {} words", p.len());
+        self.id.push(p[0].to_bits());
+        self.pos.push([p[1], p[2]]);
+        self.vel.push([p[3], p[4]]);
+        self.affine.push([p[5], p[6], p[7], p[8]]);
+        self.mass.push(p[9]);
+        self.vol0.push(p[10]);
+        self.half0.push(p[11]);
+        self.stress.push([p[12], p[13], p[14], p[15]]);
+        self.strain.push([p[16], p[17], p[18]]);
+        self.defgrad.push([p[19], p[20], p[21], p[22]]);
+        self.eps_p.push(p[23]);
+        self.material.push(p[24].to_bits() as u16);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -192,10 +194,10 @@ mod tests {
             p.affine[i as usize] = [0.5, i as f64, -2.0, 1.0];
         }
         let mut buf = Vec::new();
-        p.pack(3, &mut buf);
-        assert_eq!(buf.len(), PACKED);
+        p.pack_row(3, &mut buf);
+        assert_eq!(buf.len(), Points::WORDS);
         let mut q = Points::default();
-        q.push_packed(&buf);
+        q.push_row(&buf);
         assert_eq!(q.id[0], 13);
         assert_eq!(q.stress[0], p.stress[3]);
         assert_eq!(q.affine[0], p.affine[3]);

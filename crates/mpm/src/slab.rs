@@ -11,9 +11,10 @@
 
 pub use super::balance::{balanced_columns, column_counts, MIN_COLUMNS, REBALANCE_EVERY};
 use super::error::MpmError;
-use super::points::PACKED;
+use super::points::Points;
 use super::system::MpmSystem;
 use super::transfer::{Strip, Q};
+use decomposition::PackRows;
 use decomposition::{swap_neighbours_varlen, Comm};
 
 const TAG_STRIP: (u16, u16) = (300, 310);
@@ -137,7 +138,7 @@ impl MpmSystem {
             let mut keep = vec![true; self.points.len()];
             for i in 0..self.points.len() {
                 if let Some(side) = side_of(self.points.pos[i][0]) {
-                    self.points.pack(i, &mut out[side]);
+                    self.points.pack_row(i, &mut out[side]);
                     keep[i] = false;
                 }
             }
@@ -148,8 +149,8 @@ impl MpmSystem {
         self.comm_seconds += wait;
         let (kept, mut arrived) = (self.points.len(), 0);
         for msg in &got {
-            for p in msg.chunks_exact(PACKED) {
-                self.points.push_packed(p);
+            for p in msg.chunks_exact(Points::WORDS) {
+                self.points.push_row(p);
                 arrived += 1;
             }
         }

@@ -5,6 +5,7 @@
 use super::{balanced_bounds, cutoff_for, SlabDem, TAG_COUNT, TAG_DATA};
 use crate::grains::Grains;
 use crate::system::{HistoryMap, WALL_KEY};
+use decomposition::PackRows;
 use decomposition::{swap_neighbours_varlen, Comm};
 use std::collections::HashMap;
 
@@ -24,7 +25,7 @@ impl SlabDem {
             let Some(side) = leaves_to(g.x[i], slab, peers) else {
                 continue;
             };
-            g.pack(i, &mut grains_out[side]);
+            g.pack_row(i, &mut grains_out[side]);
             sys.pack_extras(i, &mut extras_out[side]);
             dest.insert(g.id[i], side);
             keep[i] = false;
@@ -56,8 +57,8 @@ impl SlabDem {
         let width = sys.extras_width();
         for msg in got.iter() {
             let [grains, hist, extras] = split(msg);
-            for (k, p) in grains.chunks_exact(Grains::PACKED).enumerate() {
-                sys.grains.push_packed(p);
+            for (k, p) in grains.chunks_exact(Grains::WORDS).enumerate() {
+                sys.grains.push_row(p);
                 sys.push_extras(&extras[k * width..(k + 1) * width]);
             }
             for h in hist.chunks_exact(3) {
