@@ -48,23 +48,6 @@ pub struct RunOptions {
     pub restart: Option<PathBuf>,
 }
 
-impl RunOptions {
-    /// Options of a particle run (grains or MPM): no fluid overrides, the scene's length.
-    pub fn particles(out_dir: PathBuf, progress: bool, restart: Option<PathBuf>) -> Self {
-        RunOptions {
-            out_dir,
-            precision: None,
-            backend: None,
-            gpu_storage: None,
-            kernel: None,
-            steps: None,
-            end_time_s: None,
-            progress,
-            restart,
-        }
-    }
-}
-
 /// Everything `summary.json` holds.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {

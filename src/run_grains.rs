@@ -4,7 +4,7 @@
 
 use crate::driver::{RunHeader, Signals, StageClock};
 use crate::progress::Progress;
-use crate::run::{stage_stats, RunError, RunOptions, Status};
+use crate::run::{RunError, RunOptions, Status};
 use analysis::checks::evaluate;
 use analysis::collapse::{collapse_results, pile_shape, QUANTITIES};
 use analysis::Results;
@@ -294,7 +294,6 @@ pub fn run_grains(
     if status == Status::Ok && checks.iter().any(|c| !c.passed) {
         status = Status::ChecksFailed;
     }
-    let (stages, stage_seconds) = stage_stats(&GRAIN_STAGES, clock.seconds(), comm);
     let (ke, momentum, _) = global_state(&d, comm);
     let mut counts = [
         d.migrated as f64,
@@ -316,8 +315,7 @@ pub fn run_grains(
     header.steps = step;
     header.simulated_time_s = d.system.time;
     header.wall_time_s = wall;
-    header.stage_seconds = stage_seconds;
-    header.stages = stages;
+    header.set_stages(&clock, comm);
     header.checkpoints = checkpoints;
     header.results = results;
     header.checks = checks;

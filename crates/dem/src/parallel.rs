@@ -17,7 +17,7 @@ use super::contact::DemError;
 use super::grains::Grains;
 use super::system::{DemSetup, DemSystem, HistoryMap, WALL_KEY};
 use decomposition::Comm;
-use decomposition::PackRows;
+use decomposition::{pack_rows, unpack_rows};
 
 /// Values sent per ghost every step: x, y, vx, vy, ω.
 const FORWARD: usize = 5;
@@ -255,20 +255,14 @@ impl SlabDem {
             }
         }
         let msgs = send.clone().map(|list| {
-            let mut out = Vec::with_capacity(list.len() * Grains::WORDS);
-            for &i in &list {
-                g.pack_row(i as usize, &mut out);
-            }
+            let out = pack_rows(g, list.iter().map(|&i| i as usize));
             join(&[&out, &[], &[]])
         });
         let got = self.exchange_varlen(comm, &msgs);
         let sys = &mut self.system;
         for (side, msg) in got.iter().enumerate() {
             let [grains, _, _] = split(msg);
-            for p in grains.chunks_exact(Grains::WORDS) {
-                sys.grains.push_row(p);
-            }
-            self.recv[side] = grains.len() / Grains::WORDS;
+            self.recv[side] = unpack_rows(&mut sys.grains, grains);
         }
         // 3. The list; the spatial sort renumbers owned grains, so follow it.
         let order = sys.rebuild_from(&live, DemSystem::skin_for(self.rmax), self.rmax);

@@ -11,11 +11,10 @@
 
 pub use super::balance::{balanced_columns, column_counts, MIN_COLUMNS, REBALANCE_EVERY};
 use super::error::MpmError;
-use super::points::Points;
 use super::system::MpmSystem;
 use super::transfer::{Strip, Q};
-use decomposition::PackRows;
 use decomposition::{swap_neighbours_varlen, Comm};
+use decomposition::{unpack_rows, PackRows};
 
 const TAG_STRIP: (u16, u16) = (300, 310);
 const TAG_MIGRATE: (u16, u16) = (320, 330);
@@ -149,10 +148,7 @@ impl MpmSystem {
         self.comm_seconds += wait;
         let (kept, mut arrived) = (self.points.len(), 0);
         for msg in &got {
-            for p in msg.chunks_exact(Points::WORDS) {
-                self.points.push_row(p);
-                arrived += 1;
-            }
+            arrived += unpack_rows(&mut self.points, msg);
         }
         if leaving + arrived > 0 {
             self.invalidate_order();
