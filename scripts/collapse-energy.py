@@ -2,7 +2,7 @@
 """Energy budget of a column-collapse run (MPM or DEM), snapshot by snapshot.
 
 Reads RUN/summary.json and RUN/mpm.h5 or RUN/grains.h5 (`grainflow run ... --out RUN`; set
-the scene's output_every_s small enough to resolve the collapse, e.g. tau_c / 25). Prints,
+the scene's [output] every_s small enough to resolve the collapse, e.g. tau_c / 25). Prints,
 against t / tau_c (tau_c = sqrt(H_i / g)):
   KE/E0    kinetic energy (DEM: translation and rotation of the disks),
   KEx/E0   its horizontal part,

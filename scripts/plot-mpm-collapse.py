@@ -35,7 +35,7 @@ def thick_front(run_dir, min_height, li):
     import h5py
     import numpy as np
     s = json.load(open(os.path.join(run_dir, "summary.json")))
-    h = s["cell_size_m"]
+    h = cell_size(s)
     with h5py.File(os.path.join(run_dir, "mpm.h5"), "r") as f:
         last = sorted(k for k in f if k.startswith("step_"))[-1]
         pos = f[last]["position"][:, :2]
@@ -46,6 +46,17 @@ def thick_front(run_dir, min_height, li):
     while i < len(top) and top[i] >= min_height:
         i += 1
     return (i * h - li) / li
+
+
+def cell_size(s):
+    """The run's cell size (m): the summary's own figure, else its scene's ([domain] spacing_m,
+    or [mpm] cell_size_m in runs of the older scene dialect)."""
+    if "cell_size_m" in s:
+        return s["cell_size_m"]
+    scene = s.get("scene", {})
+    if "spacing_m" in scene.get("domain", {}):
+        return scene["domain"]["spacing_m"]
+    return scene["mpm"]["cell_size_m"]
 
 
 def load(folder):

@@ -82,9 +82,46 @@ pub enum Command {
     Check {
         /// Scene file (TOML).
         scene: PathBuf,
+        /// Ranks the run will use: the memory per node is judged for them.
+        #[arg(long, default_value_t = 1)]
+        ranks: usize,
     },
     /// Print version, threads, ranks and the GPU adapters wgpu finds.
     Info,
+    /// Write a complete, commented scene of one kind to start from (stdout, or `--out`).
+    Template {
+        /// The kind of scene.
+        #[arg(value_enum)]
+        kind: TemplateKind,
+        /// Write it to this file (refused when the file exists).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+/// The scene templates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TemplateKind {
+    /// A fluid: flow past a cylinder in a channel, with probes and the drag analysis.
+    Fluid,
+    /// Fluid and grains: a disk settling in water.
+    Coupled,
+    /// Dry grains: a granular column collapse.
+    Grains,
+    /// A continuum: a Mohr–Coulomb column collapse (MPM).
+    Mpm,
+}
+
+impl TemplateKind {
+    /// The template's text (`templates/*.toml`, compiled in).
+    pub fn text(self) -> &'static str {
+        match self {
+            TemplateKind::Fluid => include_str!("../templates/fluid.toml"),
+            TemplateKind::Coupled => include_str!("../templates/coupled.toml"),
+            TemplateKind::Grains => include_str!("../templates/grains.toml"),
+            TemplateKind::Mpm => include_str!("../templates/mpm.toml"),
+        }
+    }
 }
 
 /// A finite, positive number of seconds (`--end-time`).
@@ -148,4 +185,8 @@ pub struct RunArgs {
     /// ranks on this node outnumber its cores.
     #[arg(long, value_enum, default_value = "auto")]
     pub wait_policy: WaitPolicyArg,
+    /// Start even when the run would take more than 10⁹ steps or more memory than this
+    /// node has (both are refused otherwise, with the figures).
+    #[arg(long)]
+    pub force: bool,
 }

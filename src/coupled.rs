@@ -39,7 +39,7 @@ pub fn lbm_dem<T: Real>(
     };
     let units = scene.units;
     let gs = grain_scene(s, spec, &scene.base_dir, &scene.path);
-    let domain = gs.scene.region.max_m;
+    let domain = gs.scene.domain.size();
     let rho_ratio = s.fluid.density_kg_m3 / spec.density_kg_m3;
     let g = spec.gravity_m_s2;
     // Static buoyancy by reduced gravity (1 − ρ/ρ_s) g (seed §5.4, eq. 5.57).

@@ -116,9 +116,18 @@ impl RunHeader {
         }
     }
 
-    /// Fill in the stage timings from each rank's `clock` (collective).
-    pub fn set_stages(&mut self, clock: &StageClock, comm: &dyn Comm) {
-        let (stages, slowest) = stage_stats(clock.names, &clock.seconds, comm);
+    /// Fill in the stage timings from each rank's `clocks` (the solver's and the time
+    /// loop's; collective).
+    pub fn set_stages(&mut self, clocks: &[&StageClock], comm: &dyn Comm) {
+        let names: Vec<&'static str> = clocks
+            .iter()
+            .flat_map(|c| c.names.iter().copied())
+            .collect();
+        let seconds: Vec<f64> = clocks
+            .iter()
+            .flat_map(|c| c.seconds.iter().copied())
+            .collect();
+        let (stages, slowest) = stage_stats(&names, &seconds, comm);
         self.stages = stages;
         self.stage_seconds = slowest;
     }
@@ -154,6 +163,16 @@ impl StageClock {
     /// Seconds per stage, in the order of the names.
     pub fn seconds(&self) -> &[f64] {
         &self.seconds
+    }
+
+    /// A clock for the stages `names` that has run `seconds` (in their order) already:
+    /// the stage times a solver keeps itself.
+    pub fn with_seconds(names: &'static [&'static str], seconds: &[f64]) -> Self {
+        assert_eq!(names.len(), seconds.len(), "one time per stage");
+        StageClock {
+            names,
+            seconds: seconds.to_vec(),
+        }
     }
 }
 

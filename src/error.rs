@@ -26,4 +26,10 @@ pub enum RunError {
     /// The material points could not be set up.
     #[error(transparent)]
     Mpm(#[from] mpm::MpmError),
+    /// The run would take too many steps or too much memory (`--force` overrides).
+    #[error("{0}")]
+    TooLarge(String),
+    /// SIGTERM arrived before the first step (while the sample settled).
+    #[error("{0}")]
+    Interrupted(String),
 }

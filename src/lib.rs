@@ -19,6 +19,7 @@ pub use ::mpm;
 pub use ::scene;
 pub use ::stability;
 
+pub mod budget;
 pub mod coupled;
 pub mod driver;
 pub mod error;
@@ -28,3 +29,4 @@ pub mod run;
 pub mod run_grains;
 pub mod run_mpm;
 pub mod simulation;
+pub mod time_loop;

@@ -11,9 +11,10 @@ use decomposition::{launched_by_mpi, Comm, MpiComm, SingleProcess};
 use grainflow::driver::RunHeader;
 use grainflow::pool::{in_pool, WaitPolicy};
 use grainflow::run::{
-    run_on, step_count, Backend, GpuStorage, Kernel, Precision, RunOptions, Status,
+    run_on, step_count, Backend, GpuStorage, Kernel, Precision, RunError, RunOptions, Status,
 };
 use grainflow::scene;
+use grainflow::{budget, time_loop};
 
 fn main() {
     // Writing to a closed pipe (`grainflow check … | head`) ends the process quietly, as
@@ -63,7 +64,8 @@ fn real_main() -> Result<i32> {
     };
     match cli.command {
         Command::Info => info(),
-        Command::Check { scene } => check(&scene),
+        Command::Template { kind, out } => template(kind, out),
+        Command::Check { scene, ranks } => check(&scene, ranks),
         Command::StabilityMap { out, threads } => stability_map(out, threads),
         Command::Run(args) => run(args),
     }
@@ -105,10 +107,47 @@ fn info() -> Result<i32> {
     Ok(0)
 }
 
-/// `grainflow check SCENE`: validate any kind of scene and print what a run will use.
-fn check(scene: &std::path::Path) -> Result<i32> {
-    match scene::load_any(scene)? {
-        scene::AnyScene::Fluid(s) => print_check(&s),
+/// `grainflow template KIND`: a complete, commented scene to start from, on stdout or into
+/// a new file.
+fn template(kind: cli::TemplateKind, out: Option<std::path::PathBuf>) -> Result<i32> {
+    let text = kind.text();
+    match out {
+        None => print!("{text}"),
+        Some(path) => {
+            let mut file = std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+                .with_context(|| {
+                    format!("creating {} (an existing file is kept)", path.display())
+                })?;
+            use std::io::Write;
+            file.write_all(text.as_bytes())
+                .with_context(|| format!("writing {}", path.display()))?;
+            eprintln!(
+                "wrote {}; check it with `grainflow check {0}`, run it with `grainflow run {0}`",
+                path.display()
+            );
+        }
+    }
+    Ok(0)
+}
+
+/// `grainflow check SCENE`: validate any kind of scene and print what a run will use; a
+/// run that `run` would refuse for its size (on `ranks` ranks) fails the check.
+fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
+    let any = scene::load_any(scene)?;
+    let cost = match &any {
+        scene::AnyScene::Fluid(s) => {
+            print_check(s);
+            let one = s.scene.run.backend == grainflow::scene::Backend::Cpu
+                && grainflow::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
+            let bytes = match s.scene.run.precision {
+                Precision::F32 => 4.0,
+                Precision::F64 => 8.0,
+            };
+            Some(budget::fluid_cost(s, step_count(s, None, None), bytes, one))
+        }
         scene::AnyScene::Grains(g) => {
             println!("{}: valid grains scene", g.path.display());
             println!("  title: {}", g.scene.title);
@@ -117,39 +156,75 @@ fn check(scene: &std::path::Path) -> Result<i32> {
             for w in &g.warnings {
                 println!("  warning: {w}");
             }
+            g.planned_time_step().map(|dt| {
+                let r = &g.scene.run;
+                let steps =
+                    time_loop::particle_last_step((None, None), (r.steps, r.end_time_s), dt);
+                println!("  time step: {dt:.4e} s (the smallest grain's)");
+                let grains = g.estimated_grains().unwrap_or(0.0);
+                budget::Cost {
+                    steps,
+                    memory_bytes: grains * budget::GRAIN_BYTES,
+                }
+            })
         }
         scene::AnyScene::Mpm(m) => {
-            let spec = m.setup.spec;
-            println!("{}: valid MPM scene", m.path.display());
-            println!("  title: {}", m.scene.title);
-            println!(
-                "  grid: {} × {} cells of {} m; {:?} shape functions, {:?} update",
-                spec.nx, spec.ny, spec.h, m.setup.shape, m.setup.scheme
-            );
-            println!("  material points: {}", m.points.len());
-            println!(
-                "  time step: {:.4e} s (CFL limit {:.4e} s)",
-                m.setup.dt, m.critical_dt
-            );
-            let c = m.setup.dt / m.critical_dt;
-            let verdict = match grainflow::stability::mpm::courant_limit(
-                grainflow::stability::MPM_CSV,
-            ) {
-                Some(l) if c <= l => format!(
-                    "Courant number {c:.3}: inside the measured stable range (stable up to {l}, jobs/stability/mpm-courant.csv)"
-                ),
-                Some(l) => format!(
-                    "Courant number {c:.3}: likely unstable (measured stable only up to {l}): shorten the time step"
-                ),
-                None => format!("Courant number {c:.3}: no measured limit"),
-            };
-            println!("  stability: {verdict}");
-            for w in &m.warnings {
-                println!("  warning: {w}");
-            }
+            print_mpm_check(m);
+            let r = &m.scene.run;
+            let steps =
+                time_loop::particle_last_step((None, None), (r.steps, r.end_time_s), m.setup.dt);
+            Some(budget::mpm_cost(m, steps))
         }
+    };
+    let Some(cost) = cost else {
+        println!("  steps: decided by the grains of the sample file");
+        return Ok(0);
+    };
+    println!("  steps: {}", cost.steps);
+    println!(
+        "  memory: about {:.1} MiB in all, {ranks} rank(s)",
+        cost.memory_bytes / 1048576.0
+    );
+    if let Some(why) = budget::objection(cost, ranks, budget::machine_memory_bytes()) {
+        println!("  refused: {why}");
+        return Ok(1);
+    }
+    // The obstacles as `run` draws them (a mask image is read and checked here too).
+    if let scene::AnyScene::Fluid(s) = &any {
+        grainflow::run::check_quantities(s)?;
+        scene::build_lattice(s)?;
     }
     Ok(0)
+}
+
+/// What `check` prints about an MPM scene.
+fn print_mpm_check(m: &scene::ValidMpmScene) {
+    let spec = m.setup.spec;
+    println!("{}: valid MPM scene", m.path.display());
+    println!("  title: {}", m.scene.title);
+    println!(
+        "  grid: {} × {} cells of {} m; {:?} shape functions, {:?} update",
+        spec.nx, spec.ny, spec.h, m.setup.shape, m.setup.scheme
+    );
+    println!("  material points: {}", m.points.len());
+    println!(
+        "  time step: {:.4e} s (CFL limit {:.4e} s)",
+        m.setup.dt, m.critical_dt
+    );
+    let c = m.setup.dt / m.critical_dt;
+    let verdict = match grainflow::stability::mpm::courant_limit(grainflow::stability::MPM_CSV) {
+        Some(l) if c <= l => format!(
+            "Courant number {c:.3}: inside the measured stable range (stable up to {l}, jobs/stability/mpm-courant.csv)"
+        ),
+        Some(l) => format!(
+            "Courant number {c:.3}: likely unstable (measured stable only up to {l}): shorten the time step"
+        ),
+        None => format!("Courant number {c:.3}: no measured limit"),
+    };
+    println!("  stability: {verdict}");
+    for w in &m.warnings {
+        println!("  warning: {w}");
+    }
 }
 
 /// `grainflow stability-map`: measure the stability limits and write the maps.
@@ -193,7 +268,11 @@ fn run(args: RunArgs) -> Result<i32> {
         gpu_storage,
         kernel,
         wait_policy,
+        force,
     } = args;
+    // SIGTERM and SIGUSR1 are caught from here on: during set-up they stop the run at its
+    // first step, with a checkpoint of the initial state.
+    grainflow::driver::Signals::install();
     let comm = communicator()?;
     let comm = comm.as_ref();
     if let Some(t) = threads {
@@ -231,6 +310,7 @@ fn run(args: RunArgs) -> Result<i32> {
             KernelArg::TwoArray => Kernel::TwoArray,
             KernelArg::InPlace => Kernel::InPlace,
         }),
+        force,
     };
     let fluid_only = |kind: &str| {
         if opts.precision.is_some() || opts.backend.is_some() {
@@ -278,7 +358,24 @@ fn run_fluid_scene(
             if spin { " (idle workers active)" } else { "" }
         );
     }
-    let summary = run_on(s, opts, comm)?;
+    let summary = match run_on(s, opts, comm) {
+        Err(RunError::Interrupted(why)) => {
+            let solver = if s.scene.grains.is_some() {
+                "coupled"
+            } else {
+                "fluid"
+            };
+            let header = RunHeader::new(
+                solver,
+                s.path.clone(),
+                s.scene.title.clone(),
+                s.warnings.clone(),
+                comm,
+            );
+            return stopped_before_start(header, why, &opts.out_dir, comm);
+        }
+        other => other?,
+    };
     if !comm.is_root() {
         return Ok(exit_code(summary.run.status));
     }
@@ -286,7 +383,11 @@ fn run_fluid_scene(
         "{} steps in {:.2} s: {:.1} MLUPS (kernel {:.1})",
         summary.run.steps, summary.run.wall_time_s, summary.mlups, summary.kernel_mlups
     );
-    let files = "fields.h5 + fields.xdmf, probe_*.csv";
+    let files = if s.scene.grains.is_some() {
+        "fields.h5 + fields.xdmf, grains.h5 + grains.xdmf, probe_*.csv"
+    } else {
+        "fields.h5 + fields.xdmf, probe_*.csv"
+    };
     Ok(report(&summary.run, files, &opts.out_dir))
 }
 
@@ -339,7 +440,19 @@ fn run_grain_scene(
             active_note()
         );
     }
-    let summary = grainflow::run_grains::run_grains(g, opts, comm)?;
+    let summary = match grainflow::run_grains::run_grains(g, opts, comm) {
+        Err(RunError::Interrupted(why)) => {
+            let header = RunHeader::new(
+                "grains",
+                g.path.clone(),
+                g.scene.title.clone(),
+                g.warnings.clone(),
+                comm,
+            );
+            return stopped_before_start(header, why, &opts.out_dir, comm);
+        }
+        other => other?,
+    };
     if !comm.is_root() {
         return Ok(exit_code(summary.run.status));
     }
@@ -360,6 +473,25 @@ fn run_grain_scene(
     ))
 }
 
+/// A run stopped by SIGTERM before its first step: a `summary.json` that says so (rank 0)
+/// and exit status 4.
+fn stopped_before_start(
+    mut header: RunHeader,
+    why: String,
+    out: &std::path::Path,
+    comm: &dyn decomposition::Comm,
+) -> Result<i32> {
+    header.status = Status::Interrupted;
+    header.error = Some(why.clone());
+    if comm.is_root() {
+        grainflow::io::atomic::ensure_writable_dir(out)?;
+        let json = serde_json::to_vec_pretty(&header).context("writing summary.json")?;
+        grainflow::io::atomic::write_atomic(&out.join("summary.json"), &json)?;
+        eprintln!("error: {why}");
+    }
+    Ok(exit_code(Status::Interrupted))
+}
+
 /// Print a run's results, checks, output folder (`files` are what it wrote besides
 /// summary.json and pictures/) and any error or restart hint; returns the exit code.
 fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
@@ -367,8 +499,13 @@ fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
         println!("  {k} = {v:.6e}");
     }
     print_checks(&run.checks);
+    let pictures = if out.join("pictures").is_dir() {
+        ", pictures/"
+    } else {
+        ""
+    };
     println!(
-        "output: {}  (summary.json, {files}, pictures/)",
+        "output: {}  (summary.json, {files}{pictures})",
         out.display()
     );
     if let Some(e) = &run.error {
@@ -486,15 +623,14 @@ fn print_check(s: &scene::ValidScene) {
         verdict.describe(&op, u.tau, u.mach)
     );
     println!("  Reynolds number  {:.4}", u.reynolds);
-    println!("  steps            {}", step_count(s, None, None));
-    let cells = ((nx + 2) * (ny + 2)) as f64;
     // The in-place kernel (the CPU default) holds one distribution buffer.
     let one = s.scene.run.backend == grainflow::scene::Backend::Cpu
         && grainflow::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
     let buffers = if one { 1.0 } else { 2.0 };
-    let bytes = |b: f64| buffers * 9.0 * cells * b + cells * 2.0;
+    let coupled = s.scene.grains.is_some();
+    let bytes = |b: f64| budget::fluid_bytes([nx, ny], buffers, b, coupled);
     println!(
-        "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 ({} distribution buffer{} + cell types)",
+        "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 ({} distribution buffer{}, cell types, snapshot fields)",
         bytes(8.0) / 1048576.0,
         bytes(4.0) / 1048576.0,
         buffers,

@@ -1,7 +1,9 @@
 //! Running a scene end to end: the time loop, output, analyses, checks and `summary.json`.
 
+use crate::driver::StageClock;
 use crate::progress::Progress;
 use crate::simulation::{stage, Simulation, STAGES};
+use crate::time_loop::{drive, Due, Flow, LoopEnd, LoopPlan, Stepper};
 use analysis::checks::evaluate;
 use analysis::{self, Results};
 use decomposition::{Comm, SingleProcess};
@@ -9,19 +11,18 @@ use io::atomic::{ensure_writable_dir, write_atomic};
 use io::checkpoint;
 use io::hdf5_out::Layout;
 use io::OutputError;
-use lbm::fields::Totals;
+use lbm::fields::{Fields, Totals};
 use lbm::Real;
 use scene::{SceneError, Units, ValidScene};
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::path::PathBuf;
-use std::time::Instant;
+use std::path::{Path, PathBuf};
 
 mod output;
 use output::Output;
 
+use crate::driver::RunHeader;
 pub use crate::driver::{stage_stats, StageStats, Status};
-use crate::driver::{RunHeader, Signals};
 pub use crate::error::RunError;
 pub use scene::{Backend, GpuStorage, Kernel, Precision};
 
@@ -46,6 +47,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// Continue from this checkpoint instead of the initial condition.
     pub restart: Option<PathBuf>,
+    /// Start even beyond the step and memory limits ([`crate::budget`]).
+    pub force: bool,
 }
 
 /// Everything `summary.json` holds.
@@ -112,22 +115,7 @@ pub fn run(scene: &ValidScene, opts: &RunOptions) -> Result<Summary, RunError> {
 /// writes `summary.json`, the XDMF, probe CSVs and pictures. An instability is not an
 /// `Err`: the summary says `unstable` and the output so far is kept.
 pub fn run_on(scene: &ValidScene, opts: &RunOptions, comm: &dyn Comm) -> Result<Summary, RunError> {
-    let names = analysis::result_names(scene);
-    for c in &scene.scene.checks {
-        if !names.contains(&c.quantity) {
-            return Err(SceneError::Invalid {
-                path: scene.path.clone(),
-                line: None,
-                key: "quantity".into(),
-                message: format!(
-                    "check on unknown quantity `{}`; this scene produces: {}",
-                    c.quantity,
-                    names.join(", ")
-                ),
-            }
-            .into());
-        }
-    }
+    check_quantities(scene)?;
     if comm.is_root() {
         ensure_writable_dir(&opts.out_dir)?;
     }
@@ -139,7 +127,29 @@ pub fn run_on(scene: &ValidScene, opts: &RunOptions, comm: &dyn Comm) -> Result<
     }
 }
 
-/// Number of steps a run will take.
+/// Every check names a quantity the scene's probes and analyses produce.
+pub fn check_quantities(scene: &ValidScene) -> Result<(), SceneError> {
+    let names = analysis::result_names(scene);
+    match scene
+        .scene
+        .checks
+        .iter()
+        .find(|c| !names.contains(&c.quantity))
+    {
+        None => Ok(()),
+        Some(c) => Err(SceneError::Invalid {
+            path: scene.path.clone(),
+            line: None,
+            key: "quantity".into(),
+            message: format!(
+                "check on unknown quantity `{}`; this scene produces: {}",
+                c.quantity,
+                names.join(", ")
+            ),
+        }),
+    }
+}
+
 /// Number of steps a fluid run will take: `steps`, else `end_time_s` (s) in whole steps,
 /// else the scene's own `steps` or `end_time_s`.
 pub fn step_count(scene: &ValidScene, steps: Option<u64>, end_time_s: Option<f64>) -> u64 {
@@ -150,25 +160,148 @@ pub fn step_count(scene: &ValidScene, steps: Option<u64>, end_time_s: Option<f64
         .unwrap_or_else(|| in_steps(scene.scene.run.end_time_s.unwrap_or(0.0)))
 }
 
-fn run_typed<T: Real + hdf5::H5Type>(
+/// A fluid (or coupled) simulation as the driver's time loop steps it, with its output.
+struct FluidStepper<'a, T: Real + hdf5::H5Type> {
+    scene: &'a ValidScene,
+    sim: Simulation<T>,
+    out: Output,
+    /// The step the run stops after.
+    last_step: u64,
+    /// The last step's fields, kept from its snapshot for the summary's totals (holding
+    /// the fields between snapshots would cost three values per cell for the whole run).
+    final_fields: Option<Fields>,
+    /// What a checkpoint carries besides the populations.
+    totals_initial: Totals,
+    momentum_initial: Option<[[f64; 2]; 2]>,
+    grains_initial: Vec<[f64; 3]>,
+}
+
+impl<T: Real + hdf5::H5Type> Stepper for FluidStepper<'_, T> {
+    fn steps_done(&self) -> u64 {
+        self.sim.fluid.lattice().steps_done()
+    }
+
+    fn time_s(&self) -> f64 {
+        self.scene.units.time_si(self.steps_done())
+    }
+
+    fn advance(&mut self, comm: &dyn Comm) -> Flow {
+        match self.sim.step(comm) {
+            Ok(()) => Flow::Go,
+            Err(e) => Flow::Unstable(e.to_string()),
+        }
+    }
+
+    fn observe(&mut self, comm: &dyn Comm, due: Due) -> Result<Flow, RunError> {
+        let every = self.scene.scene.output.probe_every_steps();
+        let probe = due.step.is_multiple_of(every) && self.sim.has_probes();
+        if probe || due.snapshot || due.checkpoint {
+            // A device backend checks for instabilities every few steps; nothing is
+            // recorded or written from a bad state.
+            if let Err(e) = self.sim.check(comm) {
+                return Ok(Flow::Unstable(e.to_string()));
+            }
+        }
+        if probe {
+            self.sim.record_probes(comm);
+        }
+        Ok(Flow::Go)
+    }
+
+    fn snapshot(&mut self, comm: &dyn Comm) -> Result<(), RunError> {
+        let step = self.steps_done();
+        let f = self.sim.fields(comm);
+        self.out
+            .snapshot(step, &self.scene.units, &mut self.sim, comm, &f)?;
+        if step == self.last_step {
+            self.final_fields = Some(f);
+        }
+        Ok(())
+    }
+
+    fn checkpoint(&mut self, comm: &dyn Comm, path: &Path, _next: f64) -> Result<(), RunError> {
+        let pops = self.sim.fluid.export_interior();
+        let sim = &self.sim;
+        let lattice = sim.fluid.lattice();
+        let steps = lattice.steps_done();
+        let state = checkpoint::RunState {
+            step: steps,
+            time_s: self.scene.units.time_si(steps),
+            precision: T::NAME.into(),
+            totals_initial: self.totals_initial.to_array(),
+            series: sim.series.clone(),
+        };
+        let lat = checkpoint::LatticeState {
+            global: [sim.partition.columns(), lattice.ny()],
+            slab: (lattice.x_offset(), lattice.nx()),
+            populations: &pops,
+        };
+        match &sim.grains {
+            None => checkpoint::write(path, comm, &lat, &state)?,
+            Some(c) => {
+                let grains = io::coupled_checkpoint::CoupledState {
+                    dem: &c.dem,
+                    per_grain: c.per_grain_state(),
+                    momentum_initial: self.momentum_initial,
+                    initial: &self.grains_initial,
+                };
+                io::coupled_checkpoint::write(path, comm, &lat, &state, &grains)?
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The fluid and the grains' momenta (an analysis asks for the momentum balance; it reads
+/// every fluid cell). Collective.
+fn momenta<T: Real>(
+    sim: &mut Simulation<T>,
+    scene: &ValidScene,
+    comm: &dyn Comm,
+) -> Option<[[f64; 2]; 2]> {
+    let wanted = scene
+        .scene
+        .analyses
+        .iter()
+        .any(|a| matches!(a, scene::Analysis::MomentumBalance));
+    let Simulation { grains, fluid, .. } = sim;
+    grains.as_ref().filter(|_| wanted).map(|c| {
+        let (f, g) = c.momentum(fluid.as_mut(), comm);
+        [f, g]
+    })
+}
+
+/// The backend, GPU storage and kernel of a run: the command line's, else the scene's.
+fn devices(
     scene: &ValidScene,
     opts: &RunOptions,
     precision: Precision,
-    comm: &dyn Comm,
-) -> Result<Summary, RunError> {
+) -> Result<(Backend, GpuStorage, Kernel), RunError> {
     let run = &scene.scene.run;
-    let n = step_count(scene, opts.steps, opts.end_time_s);
     let backend = opts.backend.unwrap_or(run.backend);
     let storage = opts.gpu_storage.unwrap_or(run.gpu_storage);
     if storage == GpuStorage::F16 && (backend != Backend::Gpu || precision != Precision::F32) {
-        return Err(SceneError::Invalid {
-            path: scene.path.clone(),
-            line: None,
-            key: "gpu_storage".into(),
-            message: "FP16 storage needs the GPU backend with f32 arithmetic: add `--backend gpu --precision f32` (or set `backend` and `precision` in [run]), or drop `gpu_storage`".into(),
-        }
-        .into());
+        return Err(scene
+            .invalid(
+                "gpu_storage",
+                "FP16 storage needs the GPU backend with f32 arithmetic: add `--backend gpu \
+             --precision f32` (or set `backend` and `precision` in [run]), or drop `gpu_storage`"
+                    .into(),
+            )
+            .into());
     }
+    Ok((backend, storage, opts.kernel.unwrap_or(run.kernel)))
+}
+
+/// Build the simulation of `scene`, from its initial condition or from `opts.restart`,
+/// with what its checkpoints carry: the initial totals, momenta and grain positions.
+#[allow(clippy::type_complexity)]
+fn set_up<T: Real + hdf5::H5Type>(
+    scene: &ValidScene,
+    opts: &RunOptions,
+    devices: (Backend, GpuStorage, Kernel),
+    comm: &dyn Comm,
+) -> Result<(Simulation<T>, Totals, Option<[[f64; 2]; 2]>, Vec<[f64; 3]>), RunError> {
     // A coupled restart reads the grains before the simulation is built (they are not
     // prepared again); the fluid follows below as for any run.
     let (restored_grains, momentum_restored, initial_restored) =
@@ -180,24 +313,11 @@ fn run_typed<T: Real + hdf5::H5Type>(
             }
             _ => (None, None, None),
         };
-    let kernel = opts.kernel.unwrap_or(run.kernel);
+    let (backend, storage, kernel) = devices;
     let mut sim = Simulation::<T>::new(scene, comm, backend, storage, kernel, restored_grains)?;
-    // The momentum balance reads every fluid cell: only when an analysis asks for it.
-    let wants_momentum = scene
-        .scene
-        .analyses
-        .iter()
-        .any(|a| matches!(a, scene::Analysis::MomentumBalance));
-    let momentum = |sim: &mut Simulation<T>| {
-        let Simulation { grains, fluid, .. } = sim;
-        grains.as_ref().filter(|_| wants_momentum).map(|c| {
-            let (f, g) = c.momentum(fluid.as_mut(), comm);
-            [f, g]
-        })
-    };
     let momentum_initial = match momentum_restored {
         Some(m) => Some(m),
-        None => momentum(&mut sim),
+        None => momenta(&mut sim, scene, comm),
     };
     // Where the grains were at step 0, for analyses (and checkpoints, which carry it on).
     let grains_initial: Vec<[f64; 3]> = match (initial_restored, &sim.grains) {
@@ -205,172 +325,110 @@ fn run_typed<T: Real + hdf5::H5Type>(
         (None, Some(c)) => c.positions(comm),
         (None, None) => Vec::new(),
     };
+    let Some(path) = &opts.restart else {
+        let initial = sim.fields(comm);
+        let totals = sim.totals(comm, &initial);
+        return Ok((sim, totals, momentum_initial, grains_initial));
+    };
     let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
-    let checkpoint_path = opts.out_dir.join("checkpoint.h5");
-    let mut totals_initial = None;
-    if let Some(path) = &opts.restart {
-        let r = checkpoint::read::<T>(
-            path,
-            comm,
-            T::NAME,
-            [nx, ny],
-            (sim.fluid.lattice().x_offset(), sim.fluid.lattice().nx()),
-            &sim.series,
-        )?;
-        if r.grains && sim.grains.is_none() {
-            return Err(OutputError::Checkpoint {
-                path: path.clone(),
-                message: "holds grains, but this scene has none; restart the coupled scene \
-                          that wrote it"
-                    .into(),
-            }
-            .into());
+    let r = checkpoint::read::<T>(
+        path,
+        comm,
+        T::NAME,
+        [nx, ny],
+        (sim.fluid.lattice().x_offset(), sim.fluid.lattice().nx()),
+        &sim.series,
+    )?;
+    if r.grains && sim.grains.is_none() {
+        return Err(OutputError::Checkpoint {
+            path: path.clone(),
+            message: "holds grains, but this scene has none; restart the coupled scene that \
+                      wrote it"
+                .into(),
         }
-        sim.restore(&r.populations, r.run.step, r.run.series);
-        totals_initial = Some(Totals::from_array(r.run.totals_initial));
+        .into());
     }
-    let start_step = sim.fluid.lattice().steps_done();
+    sim.restore(&r.populations, r.run.step, r.run.series);
+    let totals = Totals::from_array(r.run.totals_initial);
+    Ok((sim, totals, momentum_initial, grains_initial))
+}
+
+fn run_typed<T: Real + hdf5::H5Type>(
+    scene: &ValidScene,
+    opts: &RunOptions,
+    precision: Precision,
+    comm: &dyn Comm,
+) -> Result<Summary, RunError> {
+    let n = step_count(scene, opts.steps, opts.end_time_s);
+    let devices = devices(scene, opts, precision)?;
+    let one_buffer = devices.0 == Backend::Cpu
+        && crate::simulation::in_place(devices.2, scene.scene.grains.is_some());
+    let bytes = std::mem::size_of::<T>() as f64;
+    let cost = crate::budget::fluid_cost(scene, n, bytes, one_buffer);
+    crate::budget::admit(cost, comm.size(), opts.force)?;
+    let (sim, totals_initial, momentum_initial, grains_initial) =
+        set_up::<T>(scene, opts, devices, comm)?;
+    let lattice = sim.fluid.lattice();
+    let (nx, ny) = (sim.partition.columns(), lattice.ny());
+    let start_step = lattice.steps_done();
     let layout = Layout {
         nx,
         ny,
-        x0: sim.fluid.lattice().x_offset(),
-        width: sim.fluid.lattice().nx(),
+        x0: lattice.x_offset(),
+        width: lattice.nx(),
         dx: scene.units.dx_m,
     };
     let resume = opts.restart.as_ref().map(|_| start_step);
-    let mut out = Output::new(&opts.out_dir, scene, layout, comm, resume)?;
-    // Fields are computed once per output step and shared by snapshot, totals and analyses.
-    let initial = sim.fields(comm);
-    let totals_initial = match totals_initial {
-        Some(t) => t,
-        None => sim.totals(comm, &initial),
+    let out = Output::new(&opts.out_dir, scene, layout, comm, resume)?;
+    let mut stepper = FluidStepper {
+        scene,
+        sim,
+        out,
+        last_step: n,
+        final_fields: None,
+        totals_initial,
+        momentum_initial,
+        grains_initial,
     };
     if start_step == 0 {
-        if run.output_every > 0 {
-            out.snapshot(0, &scene.units, &mut sim, comm, &initial)?;
-        }
-        sim.record_probes(comm);
+        stepper.sim.record_probes(comm);
     }
-    // The fields of the last snapshot are kept only when they are the final step's (the
-    // summary's totals reuse them): holding them between snapshots would cost three f64
-    // values per cell for the whole run.
-    let mut latest_step = start_step;
-    let mut final_fields = (n <= start_step).then_some(initial);
     let mut progress = Progress::new(
         n,
         (nx * ny) as f64,
         scene.units.dt_s,
         opts.progress && comm.is_root(),
     );
-    let signals = Signals::install();
-    let mut checkpoints = Vec::new();
-    let mut last_checkpoint = Instant::now();
-    let start = Instant::now();
-    let mut error = None;
-    let mut interrupted = false;
-    let write_checkpoint = |sim: &mut Simulation<T>, checkpoints: &mut Vec<PathBuf>| {
-        let t = Instant::now();
-        let pops = sim.fluid.export_interior();
-        let steps = sim.fluid.lattice().steps_done();
-        let state = checkpoint::RunState {
-            step: steps,
-            time_s: scene.units.time_si(steps),
-            precision: T::NAME.into(),
-            totals_initial: totals_initial.to_array(),
-            series: sim.series.clone(),
-        };
-        let lat = checkpoint::LatticeState {
-            global: [nx, ny],
-            slab: (sim.fluid.lattice().x_offset(), sim.fluid.lattice().nx()),
-            populations: &pops,
-        };
-        let r = match &sim.grains {
-            None => checkpoint::write(&checkpoint_path, comm, &lat, &state),
-            Some(c) => {
-                let grains = io::coupled_checkpoint::CoupledState {
-                    dem: &c.dem,
-                    per_grain: c.per_grain_state(),
-                    momentum_initial,
-                    initial: &grains_initial,
-                };
-                io::coupled_checkpoint::write(&checkpoint_path, comm, &lat, &state, &grains)
-            }
-        };
-        sim.times.seconds[stage::CHECKPOINT] += t.elapsed().as_secs_f64();
-        checkpoints.push(checkpoint_path.clone());
-        r
-    };
-    for step in start_step + 1..=n {
-        if let Err(e) = sim.step(comm) {
-            error = Some(e.to_string());
-            break;
-        }
-        let probe = step % run.probe_every == 0 && sim.has_probes();
-        let output = (run.output_every > 0 && step % run.output_every == 0) || step == n;
-        if probe || output {
-            // A device backend checks for instabilities every few steps; nothing is
-            // recorded from a bad state.
-            if let Err(e) = sim.check(comm) {
-                error = Some(e.to_string());
-                break;
-            }
-        }
-        if probe {
-            sim.record_probes(comm);
-        }
-        if output {
-            let t = Instant::now();
-            let f = sim.fields(comm);
-            out.snapshot(step, &scene.units, &mut sim, comm, &f)?;
-            latest_step = step;
-            if step == n {
-                final_fields = Some(f);
-            }
-            sim.times.seconds[stage::OUTPUT] += t.elapsed().as_secs_f64();
-        }
-        // Signals and the wall-clock cadence are agreed on by all ranks after every step,
-        // so all checkpoint (and stop) together.
-        let wall_due = run.checkpoint_minutes > 0.0
-            && last_checkpoint.elapsed().as_secs_f64() >= 60.0 * run.checkpoint_minutes;
-        let agreed = signals.agree(comm, wall_due);
-        let due = (run.checkpoint_every > 0 && step % run.checkpoint_every == 0)
-            || agreed.checkpoint
-            || (step == n && run.checkpoint_at_end);
-        if due {
-            if let Err(e) = sim.check(comm) {
-                error = Some(e.to_string());
-                break;
-            }
-            write_checkpoint(&mut sim, &mut checkpoints)?;
-            last_checkpoint = Instant::now();
-        }
-        progress.update(step);
-        if agreed.stop {
-            interrupted = true;
-            break;
-        }
-    }
-    let wall = start.elapsed().as_secs_f64();
-    progress.finish();
-    let steps = sim.fluid.lattice().steps_done();
-    // `final_fields` is only ever the state the loop ended in.
-    let fields = final_fields.unwrap_or_else(|| sim.fields(comm));
-    if (error.is_some() || interrupted) && latest_step != steps {
-        // Keep the state the run stopped in for diagnosis, unless that step's snapshot is
-        // written already (a step that fails leaves the step count where it was: the
-        // snapshot is then the last good state). Earlier snapshots stay untouched.
-        out.snapshot(steps, &scene.units, &mut sim, comm, &fields)?;
-    }
-    let totals_final = sim.totals(comm, &fields);
-    let momentum_final = momentum(&mut sim);
+    let plan = LoopPlan::new(n, &scene.scene.output, &opts.out_dir, resume.map(|_| 0.0));
+    let end = drive(&mut stepper, &plan, &mut progress, comm)?;
+    summarise(
+        scene,
+        stepper,
+        end,
+        (precision, devices),
+        comm,
+        &opts.out_dir,
+    )
+}
+
+/// Results of the analyses (rank 0 runs them on the gathered lattice and shares them), or
+/// the run's mass and top speed when the scene asks for none. Collective.
+fn analyse<T: Real + hdf5::H5Type>(
+    st: &mut FluidStepper<T>,
+    fields: Fields,
+    totals_final: Totals,
+    comm: &dyn Comm,
+) -> Result<Results, RunError> {
+    let scene = st.scene;
+    let momentum_final = momenta(&mut st.sim, scene, comm);
+    let sim = &st.sim;
     let grain_radius = match &sim.grains {
         Some(c) => c.radii(comm),
         None => Vec::new(),
     };
     let grains_final = sim.grains.as_ref().map(|c| c.positions(comm));
-    let results = if error.is_none() && !interrupted && !scene.scene.analyses.is_empty() {
-        // Only rank 0 holds the whole lattice (and only when an analysis reads it); it runs
-        // the analyses and every rank receives its results.
+    let mut results = if !scene.scene.analyses.is_empty() {
+        // Only rank 0 holds the whole lattice (and only when an analysis reads it).
         let global = analysis::needs_fields(scene)
             .then(|| sim.gather_fields_at_root(comm, fields))
             .flatten();
@@ -380,18 +438,18 @@ fn run_typed<T: Real + hdf5::H5Type>(
             let inputs = analysis::Inputs {
                 scene,
                 fields: global.as_ref(),
-                steps,
+                steps: sim.fluid.lattice().steps_done(),
                 series: &sim.series,
-                totals: (totals_initial, totals_final),
-                momentum: momentum_initial.zip(momentum_final),
+                totals: (st.totals_initial, totals_final),
+                momentum: st.momentum_initial.zip(momentum_final),
                 grain_radius: grain_radius.clone(),
-                grains: grains_final.map(|f| (grains_initial.clone(), f)),
+                grains: grains_final.map(|f| (st.grains_initial.clone(), f)),
             };
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| analysis::run_all(&inputs)))
                 .unwrap_or_else(|_| Err(analysis::panicked()))
         });
         analysis::share_from_root(comm, local)?
-    } else if error.is_none() && !interrupted {
+    } else {
         let mut r = Results::new();
         r.insert("run.mass".into(), totals_final.mass);
         r.insert(
@@ -399,24 +457,17 @@ fn run_typed<T: Real + hdf5::H5Type>(
             scene.units.velocity_to_si(totals_final.max_speed),
         );
         r
-    } else {
-        Results::new()
     };
-    let mut results = results;
     if let Some(c) = &sim.grains {
         results.insert("coupling.substeps".into(), c.substeps() as f64);
         results.insert("coupling.grains".into(), grain_radius.len() as f64);
     }
-    let checks = evaluate(&scene.scene.checks, &results);
-    let status = match (&error, interrupted, checks.iter().all(|c| c.passed)) {
-        (Some(_), _, _) => Status::Unstable,
-        (None, true, _) => Status::Interrupted,
-        (None, false, true) => Status::Ok,
-        (None, false, false) => Status::ChecksFailed,
-    };
-    let updates = (nx * ny) as f64 * (steps - start_step) as f64;
-    let probes = sim
-        .series
+    Ok(results)
+}
+
+/// The last sample of every probe series (SI).
+fn last_probe_samples<T: Real>(sim: &Simulation<T>) -> BTreeMap<String, BTreeMap<String, f64>> {
+    sim.series
         .iter()
         .filter(|s| !s.is_empty())
         .map(|s| {
@@ -429,42 +480,68 @@ fn run_typed<T: Real + hdf5::H5Type>(
                 .collect();
             (s.name.clone(), row)
         })
-        .collect();
-    let per_rank = comm.all_gather_f64(&sim.times.seconds);
-    let k = STAGES.len();
-    let stages: BTreeMap<&'static str, StageStats> = STAGES
-        .iter()
-        .enumerate()
-        .map(|(i, name)| {
-            let v: Vec<f64> = (0..comm.size()).map(|r| per_rank[r * k + i]).collect();
-            let sum = v.iter().sum::<f64>();
-            let stats = StageStats {
-                sum_s: sum,
-                max_s: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-                min_s: v.iter().copied().fold(f64::INFINITY, f64::min),
-                mean_s: sum / v.len() as f64,
-            };
-            (*name, stats)
-        })
-        .collect();
+        .collect()
+}
+
+/// The coupling's seconds per pass (slowest rank) and its counters (summed), when there
+/// are grains. Collective.
+#[allow(clippy::type_complexity)]
+fn coupling_figures<T: Real>(
+    sim: &Simulation<T>,
+    comm: &dyn Comm,
+) -> (BTreeMap<&'static str, f64>, BTreeMap<&'static str, u64>) {
+    let Some(g) = &sim.grains else {
+        return (BTreeMap::new(), BTreeMap::new());
+    };
     // Every rank of a coupled run holds grains (maybe none in view), so this is collective.
-    let coupling_pass_seconds = match &sim.grains {
-        Some(g) => stage_stats(&coupling::PASSES, &g.pass_seconds(), comm).1,
-        None => BTreeMap::new(),
+    let seconds = stage_stats(&coupling::PASSES, &g.pass_seconds(), comm).1;
+    let mut v: Vec<f64> = g.counts().iter().map(|&c| c as f64).collect();
+    comm.sum_f64(&mut v);
+    let counts = coupling::COUNTS
+        .iter()
+        .zip(v)
+        .map(|(n, c)| (*n, c as u64))
+        .collect();
+    (seconds, counts)
+}
+
+/// Analyses, checks, probe series and `summary.json` (rank 0) of a finished loop
+/// (collective).
+fn summarise<T: Real + hdf5::H5Type>(
+    scene: &ValidScene,
+    mut st: FluidStepper<T>,
+    end: LoopEnd,
+    (precision, (backend, storage, _)): (Precision, (Backend, GpuStorage, Kernel)),
+    comm: &dyn Comm,
+    out_dir: &Path,
+) -> Result<Summary, RunError> {
+    let steps = st.steps_done();
+    // The final fields are kept only when they are the state the loop ended in.
+    let fields = match st.final_fields.take() {
+        Some(f) if steps == st.last_step => f,
+        _ => st.sim.fields(comm),
     };
-    let coupling_counts = match &sim.grains {
-        Some(g) => {
-            let mut v: Vec<f64> = g.counts().iter().map(|&c| c as f64).collect();
-            comm.sum_f64(&mut v);
-            coupling::COUNTS
-                .iter()
-                .zip(v)
-                .map(|(n, c)| (*n, c as u64))
-                .collect()
+    let totals_final = st.sim.totals(comm, &fields);
+    let results = if end.status == Status::Ok {
+        analyse(&mut st, fields, totals_final, comm)?
+    } else {
+        let mut r = Results::new();
+        if let Some(c) = &st.sim.grains {
+            r.insert("coupling.substeps".into(), c.substeps() as f64);
+            r.insert("coupling.grains".into(), c.radii(comm).len() as f64);
         }
-        None => BTreeMap::new(),
+        r
     };
-    let wall = comm.max_f64(wall);
+    let checks = evaluate(&scene.scene.checks, &results);
+    let status = match end.status {
+        Status::Ok if !checks.iter().all(|c| c.passed) => Status::ChecksFailed,
+        other => other,
+    };
+    let sim = &st.sim;
+    let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
+    let updates = (nx * ny) as f64 * (steps - end.start_step) as f64;
+    let (coupling_pass_seconds, coupling_counts) = coupling_figures(sim, comm);
+    let wall = comm.max_f64(end.wall_s);
     let mut halo_bytes = [sim.fluid.lattice().halo_bytes_per_step() as f64];
     comm.sum_f64(&mut halo_bytes);
     let solver = if sim.grains.is_some() {
@@ -480,15 +557,15 @@ fn run_typed<T: Real + hdf5::H5Type>(
         comm,
     );
     header.status = status;
-    header.error = error;
-    header.restarted_from_step = start_step;
+    header.error = end.error.clone();
+    header.restarted_from_step = end.start_step;
     header.steps = steps;
     header.simulated_time_s = scene.units.time_si(steps);
     header.wall_time_s = wall;
-    header.stage_seconds = stages.iter().map(|(k, v)| (*k, v.max_s)).collect();
-    let kernel_mlups = updates / stages[STAGES[stage::COLLIDE_STREAM]].max_s.max(1e-12) / 1e6;
-    header.stages = stages;
-    header.checkpoints = checkpoints;
+    let solver_clock = StageClock::with_seconds(&STAGES, &sim.times.seconds);
+    header.set_stages(&[&solver_clock, &end.clock], comm);
+    let kernel_s = header.stage_seconds[STAGES[stage::COLLIDE_STREAM]];
+    header.checkpoints = end.checkpoints.clone();
     header.results = results;
     header.checks = checks;
     let summary = Summary {
@@ -510,21 +587,21 @@ fn run_typed<T: Real + hdf5::H5Type>(
         fluid_cells: sim.fluid_cells(comm),
         memory_bytes: sim.fluid.lattice().storage_bytes(),
         mlups: updates / wall.max(1e-12) / 1e6,
-        kernel_mlups,
+        kernel_mlups: updates / kernel_s.max(1e-12) / 1e6,
         coupling_pass_seconds,
         coupling_counts,
-        snapshot_bytes: out.bytes,
-        snapshot_write_s: comm.max_f64(out.write_s),
-        totals_initial,
+        snapshot_bytes: st.out.bytes,
+        snapshot_write_s: comm.max_f64(st.out.write_s),
+        totals_initial: st.totals_initial,
         totals_final,
-        probes,
+        probes: last_probe_samples(sim),
     };
     if comm.is_root() {
         for s in &sim.series {
-            s.write_csv(&opts.out_dir)?;
+            s.write_csv(out_dir)?;
         }
         let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");
-        write_atomic(&opts.out_dir.join("summary.json"), &json)?;
+        write_atomic(&out_dir.join("summary.json"), &json)?;
     }
     comm.barrier();
     Ok(summary)

@@ -1,10 +1,11 @@
 //! Running a grains-only scene: prepare the sample (pack, settle, trim, or load), then the
-//! time loop of named, timed stages — walls (removals), DEM step (with migration and
-//! ghost exchange inside), output — and the analyses, checks and `summary.json`.
+//! driver's time loop over a [`GrainStepper`] — walls (removals), DEM step (with migration
+//! and ghost exchange inside), observations — and the analyses, checks and `summary.json`.
 
-use crate::driver::{RunHeader, Signals, StageClock};
+use crate::driver::{RunHeader, StageClock};
 use crate::progress::Progress;
 use crate::run::{RunError, RunOptions, Status};
+use crate::time_loop::{drive, particle_last_step, Due, Flow, LoopEnd, LoopPlan, Stepper};
 use analysis::checks::evaluate;
 use analysis::collapse::{collapse_results, pile_shape, QUANTITIES};
 use analysis::Results;
@@ -16,7 +17,7 @@ use io::grains_checkpoint::{self, GrainRunState};
 use io::grains_out::{write_grains_png, GrainWriter};
 use scene::{GrainAnalysis, GrainScene, ValidGrainScene};
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub(crate) mod sample;
@@ -24,8 +25,9 @@ pub(crate) mod sample;
 pub use sample::gather_grains;
 use sample::{bounds_for, global_state, prepare, start};
 
-/// Stages of a grains step, in order.
-pub const GRAIN_STAGES: [&str; 3] = ["walls", "dem", "output"];
+/// The grain solver's own stages, in the order of a step (the driver adds output and
+/// checkpoint).
+pub const GRAIN_STAGES: [&str; 3] = ["walls", "dem", "observe"];
 
 /// Everything a grains run's `summary.json` holds.
 #[derive(Debug, Clone, Serialize)]
@@ -65,6 +67,130 @@ pub struct GrainSummary {
     pub snapshots: usize,
 }
 
+/// A distributed grain system as the driver's time loop steps it, with its output.
+pub struct GrainStepper<'a> {
+    scene: &'a ValidGrainScene,
+    out_dir: PathBuf,
+    /// The grains on this rank.
+    pub d: SlabDem,
+    writer: GrainWriter,
+    /// Speed at the top of the pictures' colour scale (m/s); 0 scales a frame to itself.
+    picture_speed: f64,
+    /// The scale of every frame after the first.
+    frame_speed: f64,
+    /// Wall and floor of a column-collapse analysis.
+    collapse_at: Option<(f64, f64)>,
+    /// (t, deposit length) every 1000 steps of a collapse that did not restart.
+    fronts: Vec<(f64, f64)>,
+    start_step: u64,
+    settle_steps: u64,
+    /// (x, y, r) of every grain at the start, by id.
+    initial: Grains,
+    /// When the last wall goes (s).
+    last_removal: f64,
+    grains: usize,
+    /// This rank's seconds per [`GRAIN_STAGES`].
+    pub clock: StageClock,
+}
+
+impl Stepper for GrainStepper<'_> {
+    fn steps_done(&self) -> u64 {
+        self.d.system.steps
+    }
+
+    fn time_s(&self) -> f64 {
+        self.d.system.time
+    }
+
+    fn advance(&mut self, comm: &dyn Comm) -> Flow {
+        let t = Instant::now();
+        let sys = &mut self.d.system;
+        for (w, spec) in self.scene.scene.grains.walls.iter().enumerate() {
+            if spec.remove_at_s.is_some_and(|r| sys.time >= r) && !sys.walls[w].removed {
+                sys.remove_wall(w);
+            }
+        }
+        self.clock.add("walls", t);
+        let t = Instant::now();
+        self.d.step(comm);
+        self.clock.add("dem", t);
+        Flow::Go
+    }
+
+    fn observe(&mut self, comm: &dyn Comm, due: Due) -> Result<Flow, RunError> {
+        let t = Instant::now();
+        let flow = self.health(comm, due);
+        self.clock.add("observe", t);
+        Ok(flow)
+    }
+
+    fn snapshot(&mut self, comm: &dyn Comm) -> Result<(), RunError> {
+        self.writer.write(&self.d.system, comm)?;
+        if self.scene.scene.output.pictures() {
+            let name = format!("grains_step_{:08}.png", self.d.system.steps);
+            write_grains_png(
+                &self.out_dir.join("pictures").join(name),
+                &self.d.system,
+                ([0.0, 0.0], self.scene.scene.domain.size()),
+                self.picture_speed,
+                comm,
+            )?;
+        }
+        self.picture_speed = self.frame_speed;
+        Ok(())
+    }
+
+    fn checkpoint(&mut self, comm: &dyn Comm, path: &Path, next: f64) -> Result<(), RunError> {
+        let g = &self.initial;
+        let state = GrainRunState {
+            step: self.d.system.steps,
+            time_s: self.d.system.time,
+            next_output_s: next,
+            settle_steps: self.settle_steps,
+            migrated: self.d.migrated,
+            initial: (0..g.len())
+                .flat_map(|i| [g.x[i], g.y[i], g.r[i]])
+                .collect(),
+        };
+        grains_checkpoint::write(path, comm, &self.d, &state)?;
+        Ok(())
+    }
+}
+
+impl GrainStepper<'_> {
+    /// The deposit's front every 1000 steps (column collapses, for the time it reaches
+    /// 95 % of its run-out); every 100 steps and at the last, a finite kinetic energy and
+    /// the scene's early stop once the grains are at rest.
+    fn health(&mut self, comm: &dyn Comm, due: Due) -> Flow {
+        let step = due.step;
+        if let (Some((wx, fy)), true) = (
+            self.collapse_at,
+            step.is_multiple_of(1000) && self.start_step == 0,
+        ) {
+            let g = gather_grains(&self.d.system, comm);
+            let length = pile_shape(&g.x, &g.y, &g.r, wx, fy).length_m;
+            self.fronts.push((self.d.system.time, length));
+        }
+        if !step.is_multiple_of(100) && !due.last {
+            return Flow::Go;
+        }
+        let (ke, _, _) = global_state(&self.d, comm);
+        if !ke.is_finite() {
+            return Flow::Unstable(format!(
+                "the grains' kinetic energy is not finite at step {step} (t = {:.6e} s): \
+                 the time step is too large for these contacts; lower lambda",
+                self.d.system.time
+            ));
+        }
+        let stop = self.scene.scene.run.stop_below_kinetic_energy_j_m;
+        if stop > 0.0 && self.d.system.time > self.last_removal && ke / (self.grains as f64) < stop
+        {
+            return Flow::Settled;
+        }
+        Flow::Go
+    }
+}
+
 /// Run a grains scene on every rank of `comm` (collective). Writes `grains.h5` +
 /// `grains.xdmf`, `pictures/grains_*.png` and (rank 0) `summary.json` into `opts.out_dir`.
 pub fn run_grains(
@@ -78,85 +204,38 @@ pub fn run_grains(
         ensure_writable_dir(&opts.out_dir.join("pictures"))?;
     }
     comm.barrier();
-    let restored = match &opts.restart {
-        Some(p) => Some(grains_checkpoint::read(p, comm, s.grains.walls.len())?),
-        None => None,
-    };
-    let (mut d, settle_steps, initial, resume) = match restored {
-        None => {
-            let (grains, settle_steps) = prepare(scene, comm)?;
-            let allow = s.grains.allow_overlap || settle_steps > 0;
-            let d = start(scene, grains, allow, comm)?;
-            let initial = gather_grains(&d.system, comm);
-            (d, settle_steps, initial, None)
-        }
-        Some(r) => {
-            let bounds = bounds_for(scene, &r.grains, comm);
-            let mut setup = scene.dem_setup(&r.grains);
-            apply_walls(&mut setup.walls, &r.walls);
-            let clock = (r.run.time_s, r.run.step);
-            let mut d = SlabDem::restore(r.grains, r.history, &bounds, setup, clock, comm)?;
-            d.system.global_damping = s.grains.global_damping_1_s;
-            if comm.is_root() {
-                d.migrated = r.run.migrated;
-            }
-            let mut initial = Grains::default();
-            for p in r.run.initial.chunks_exact(3) {
-                initial.push([p[0], p[1]], p[2], s.grains.density_kg_m3, false);
-            }
-            (d, r.run.settle_steps, initial, Some(r.run))
-        }
-    };
-    let n_total = d.global_count(comm);
-    let region = (s.region.min_m, s.region.max_m);
-    let mut writer =
-        GrainWriter::open(&opts.out_dir, comm, resume.as_ref().map(|r| r.step), false)?;
-    let mut clock = StageClock::new(&GRAIN_STAGES);
-    let picture = |d: &SlabDem, vmax: f64| -> Result<(), RunError> {
-        let name = format!("grains_step_{:08}.png", d.system.steps);
-        write_grains_png(
-            &opts.out_dir.join("pictures").join(name),
-            &d.system,
-            region,
-            vmax,
-            comm,
-        )?;
-        Ok(())
-    };
-    if resume.is_none() {
-        writer.write(&d.system, comm)?;
-        if s.run.pictures {
-            picture(&d, 0.0)?;
-        }
-    }
+    let (d, settle_steps, initial, resume) = set_up(scene, opts, comm)?;
+    let grains = d.global_count(comm);
+    let writer = GrainWriter::open(&opts.out_dir, comm, resume.as_ref().map(|r| r.step), false)?;
     // Speed scale of the pictures: free fall over the sample height, so frames compare.
     let height = initial.y.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
         - initial.y.iter().cloned().fold(f64::INFINITY, f64::min);
     let g_abs = s.grains.gravity_m_s2[0].hypot(s.grains.gravity_m_s2[1]);
-    let vmax = (2.0 * g_abs * height.max(1e-9)).sqrt();
+    let frame_speed = (2.0 * g_abs * height.max(1e-9)).sqrt();
     let dt = d.system.dt;
-    let end_time = opts.end_time_s.unwrap_or(s.run.end_time_s);
-    let total_steps = opts.steps.unwrap_or((end_time / dt).ceil() as u64);
+    let last_step = particle_last_step(
+        (opts.steps, opts.end_time_s),
+        (s.run.steps, s.run.end_time_s),
+        dt,
+    );
+    let cost = crate::budget::Cost {
+        steps: last_step.saturating_sub(d.system.steps),
+        memory_bytes: grains as f64 * crate::budget::GRAIN_BYTES,
+    };
+    crate::budget::admit(cost, comm.size(), opts.force)?;
     let mut progress = Progress::new(
-        total_steps,
-        n_total as f64,
+        last_step,
+        grains as f64,
         dt,
         opts.progress && comm.is_root(),
     )
     .with_unit("M grain-steps/s");
-    let last_removal = s
-        .grains
-        .walls
-        .iter()
-        .filter_map(|w| w.remove_at_s)
-        .fold(0.0, f64::max);
-    let mut next_output = resume
-        .as_ref()
-        .map_or(s.run.output_every_s, |r| r.next_output_s);
-    let start_step = resume.as_ref().map_or(0, |r| r.step);
-    let mut stop_time = None;
-    // The deposit's front every 1000 steps (column collapses), for the time it reaches 95 %
-    // of its run-out.
+    let plan = LoopPlan::new(
+        last_step,
+        &s.output,
+        &opts.out_dir,
+        resume.as_ref().map(|r| r.next_output_s),
+    );
     let collapse_at = s
         .analyses
         .iter()
@@ -168,133 +247,114 @@ pub fn run_grains(
             } => (*wall_x_m, *floor_y_m),
         })
         .next();
-    let mut fronts: Vec<(f64, f64)> = Vec::new();
-    let mut status = Status::Ok;
-    let mut error = None;
-    let signals = Signals::install();
-    let checkpoint_path = opts.out_dir.join("checkpoint.h5");
-    let mut checkpoints = Vec::new();
-    let initial_rows: Vec<f64> = (0..initial.len())
-        .flat_map(|i| [initial.x[i], initial.y[i], initial.r[i]])
-        .collect();
-    let write_checkpoint = |d: &SlabDem, next_output: f64, list: &mut Vec<PathBuf>| {
-        let state = GrainRunState {
-            step: d.system.steps,
-            time_s: d.system.time,
-            next_output_s: next_output,
-            settle_steps,
-            migrated: d.migrated,
-            initial: initial_rows.clone(),
-        };
-        grains_checkpoint::write(&checkpoint_path, comm, d, &state)?;
-        list.push(checkpoint_path.clone());
-        Ok::<(), RunError>(())
+    let mut stepper = GrainStepper {
+        scene,
+        out_dir: opts.out_dir.clone(),
+        start_step: d.system.steps,
+        d,
+        writer,
+        picture_speed: if resume.is_some() { frame_speed } else { 0.0 },
+        frame_speed,
+        collapse_at,
+        fronts: Vec::new(),
+        settle_steps,
+        initial,
+        last_removal: s
+            .grains
+            .walls
+            .iter()
+            .filter_map(|w| w.remove_at_s)
+            .fold(0.0, f64::max),
+        grains,
+        clock: StageClock::new(&GRAIN_STAGES),
     };
-    let t0 = Instant::now();
-    let mut step = start_step;
-    while step < total_steps {
-        let t = Instant::now();
-        for (w, spec) in s.grains.walls.iter().enumerate() {
-            if spec.remove_at_s.is_some_and(|r| d.system.time >= r) && !d.system.walls[w].removed {
-                d.system.remove_wall(w);
-            }
-        }
-        clock.add("walls", t);
-        let t = Instant::now();
-        d.step(comm);
-        step += 1;
-        clock.add("dem", t);
-        let t = Instant::now();
-        if let (Some((wx, fy)), true) = (collapse_at, step % 1000 == 0 && start_step == 0) {
-            let g = gather_grains(&d.system, comm);
-            fronts.push((d.system.time, pile_shape(&g.x, &g.y, &g.r, wx, fy).length_m));
-        }
-        if step % 100 == 0 || step == total_steps {
-            let (ke, _, _) = global_state(&d, comm);
-            if !ke.is_finite() {
-                status = Status::Unstable;
-                error = Some(format!(
-                    "the grains' kinetic energy is not finite at step {step} (t = {:.6e} s): \
-                     the time step is too large for these contacts; lower lambda",
-                    d.system.time
-                ));
-                break;
-            }
-            let quiet = s.run.stop_below_kinetic_energy_j_m > 0.0
-                && d.system.time > last_removal
-                && ke / (n_total as f64) < s.run.stop_below_kinetic_energy_j_m;
-            if quiet {
-                stop_time = Some(d.system.time);
-                break;
-            }
-        }
-        if s.run.output_every_s > 0.0 && d.system.time >= next_output {
-            next_output += s.run.output_every_s;
-            writer.write(&d.system, comm)?;
-            if s.run.pictures {
-                picture(&d, vmax)?;
-            }
-        }
-        // After the snapshot, so a restart does not write it again. Signals are agreed on
-        // by all ranks after every step, so all ranks checkpoint (and stop) together.
-        let agreed = signals.agree(comm, false);
-        let every = s.run.checkpoint_every > 0 && step % s.run.checkpoint_every == 0;
-        if agreed.checkpoint || every {
-            write_checkpoint(&d, next_output, &mut checkpoints)?;
-        }
-        if agreed.stop {
-            status = Status::Interrupted;
-            clock.add("output", t);
-            break;
-        }
-        clock.add("output", t);
-        progress.update(step);
+    let end = drive(&mut stepper, &plan, &mut progress, comm)?;
+    summarise(scene, stepper, end, g_abs, comm, &opts.out_dir)
+}
+
+/// The distributed system at the start: a prepared sample, or a checkpoint's grains. Also
+/// the settling steps, the grains at the start (x, y, r by id) and a restart's state.
+fn set_up(
+    scene: &ValidGrainScene,
+    opts: &RunOptions,
+    comm: &dyn Comm,
+) -> Result<(SlabDem, u64, Grains, Option<GrainRunState>), RunError> {
+    let s = &scene.scene;
+    let Some(p) = &opts.restart else {
+        let (grains, settle_steps) = prepare(scene, comm)?;
+        let allow = s.grains.allow_overlap || settle_steps > 0;
+        let d = start(scene, grains, allow, comm)?;
+        let initial = gather_grains(&d.system, comm);
+        return Ok((d, settle_steps, initial, None));
+    };
+    let r = grains_checkpoint::read(p, comm, s.grains.walls.len())?;
+    let bounds = bounds_for(scene, &r.grains, comm);
+    let mut setup = scene.dem_setup(&r.grains);
+    apply_walls(&mut setup.walls, &r.walls);
+    let clock = (r.run.time_s, r.run.step);
+    let mut d = SlabDem::restore(r.grains, r.history, &bounds, setup, clock, comm)?;
+    d.system.global_damping = s.grains.global_damping_1_s;
+    if comm.is_root() {
+        d.migrated = r.run.migrated;
     }
-    progress.finish();
-    let wall = t0.elapsed().as_secs_f64();
-    if status == Status::Ok && s.run.checkpoint_at_end {
-        write_checkpoint(&d, next_output, &mut checkpoints)?;
+    let mut initial = Grains::default();
+    for p in r.run.initial.chunks_exact(3) {
+        initial.push([p[0], p[1]], p[2], s.grains.density_kg_m3, false);
     }
-    if status == Status::Ok {
-        let t = Instant::now();
-        writer.write(&d.system, comm)?;
-        if s.run.pictures {
-            picture(&d, vmax)?;
-        }
-        clock.add("output", t);
-    }
-    // Analyses on the gathered deposit.
+    Ok((d, r.run.settle_steps, initial, Some(r.run)))
+}
+
+/// The column-collapse results of the deposit (gathered) against the initial column.
+fn collapse_analysis(st: &GrainStepper, end: &LoopEnd, g_abs: f64, comm: &dyn Comm) -> Results {
     let mut results = Results::new();
-    let fin = gather_grains(&d.system, comm);
-    for a in &s.analyses {
-        match a {
-            GrainAnalysis::ColumnCollapse {
-                wall_x_m,
-                floor_y_m,
-                ..
-            } => {
-                let before = pile_shape(&initial.x, &initial.y, &initial.r, *wall_x_m, *floor_y_m);
-                let after = pile_shape(&fin.x, &fin.y, &fin.r, *wall_x_m, *floor_y_m);
-                let flow_time = stop_time.unwrap_or(d.system.time) - last_removal;
-                let values = collapse_results(before, after, g_abs, flow_time);
-                for (k, v) in QUANTITIES.iter().zip(values) {
-                    results.insert(format!("collapse.{k}"), v);
-                }
-                // When the front first reached 95 % of its run-out, in τ_c (not after a
-                // restart: the series before it is gone).
-                let target = before.length_m + 0.95 * (after.length_m - before.length_m);
-                let t95 = fronts.iter().find(|f| f.1 >= target).map_or(f64::NAN, |f| {
-                    (f.0 - last_removal) / (before.height_m / g_abs).sqrt()
-                });
-                results.insert("collapse.front_t95".into(), t95);
-            }
+    let fin = gather_grains(&st.d.system, comm);
+    let initial = &st.initial;
+    for a in &st.scene.scene.analyses {
+        let GrainAnalysis::ColumnCollapse {
+            wall_x_m,
+            floor_y_m,
+            ..
+        } = a;
+        let before = pile_shape(&initial.x, &initial.y, &initial.r, *wall_x_m, *floor_y_m);
+        let after = pile_shape(&fin.x, &fin.y, &fin.r, *wall_x_m, *floor_y_m);
+        let flow_time = end.settled_s.unwrap_or(st.d.system.time) - st.last_removal;
+        let values = collapse_results(before, after, g_abs, flow_time);
+        for (k, v) in QUANTITIES.iter().zip(values) {
+            results.insert(format!("collapse.{k}"), v);
         }
+        // When the front first reached 95 % of its run-out, in τ_c (not after a restart:
+        // the series before it is gone).
+        let target = before.length_m + 0.95 * (after.length_m - before.length_m);
+        let t95 = st
+            .fronts
+            .iter()
+            .find(|f| f.1 >= target)
+            .map_or(f64::NAN, |f| {
+                (f.0 - st.last_removal) / (before.height_m / g_abs).sqrt()
+            });
+        results.insert("collapse.front_t95".into(), t95);
     }
+    results
+}
+
+/// Analyses, checks and `summary.json` (rank 0) of a finished loop (collective).
+fn summarise(
+    scene: &ValidGrainScene,
+    st: GrainStepper,
+    end: LoopEnd,
+    g_abs: f64,
+    comm: &dyn Comm,
+    out_dir: &Path,
+) -> Result<GrainSummary, RunError> {
+    let s = &scene.scene;
+    let results = collapse_analysis(&st, &end, g_abs, comm);
     let checks = evaluate(&s.checks, &results);
+    let mut status = end.status;
     if status == Status::Ok && checks.iter().any(|c| !c.passed) {
         status = Status::ChecksFailed;
     }
-    let (ke, momentum, _) = global_state(&d, comm);
+    let d = &st.d;
+    let (ke, momentum, _) = global_state(d, comm);
     let mut counts = [
         d.migrated as f64,
         d.system.contacts() as f64,
@@ -310,24 +370,25 @@ pub fn run_grains(
         comm,
     );
     header.status = status;
-    header.error = error;
-    header.restarted_from_step = start_step;
-    header.steps = step;
+    header.error = end.error.clone();
+    header.restarted_from_step = end.start_step;
+    header.steps = d.system.steps;
     header.simulated_time_s = d.system.time;
-    header.wall_time_s = wall;
-    header.set_stages(&clock, comm);
-    header.checkpoints = checkpoints;
+    header.wall_time_s = end.wall_s;
+    header.set_stages(&[&st.clock, &end.clock], comm);
+    header.checkpoints = end.checkpoints.clone();
     header.results = results;
     header.checks = checks;
+    let steps = (d.system.steps - end.start_step) as f64;
     let summary = GrainSummary {
         run: header,
         scene: s.clone(),
         slab_bounds_m: d.bounds().to_vec(),
-        grains: n_total,
-        time_step_s: dt,
+        grains: st.grains,
+        time_step_s: d.system.dt,
         lambda: scene.lambda(),
-        settle_steps,
-        grain_steps_per_s: n_total as f64 * (step - start_step) as f64 / wall.max(1e-12),
+        settle_steps: st.settle_steps,
+        grain_steps_per_s: st.grains as f64 * steps / end.wall_s.max(1e-12),
         migrated: counts[0] as u64,
         rebalances: d.rebalances,
         comm_wait_s: comm_wait,
@@ -335,11 +396,11 @@ pub fn run_grains(
         list_rebuilds: d.system.list_rebuilds(),
         kinetic_energy_j_m: ke,
         momentum,
-        snapshots: writer.snapshots(),
+        snapshots: st.writer.snapshots(),
     };
     if comm.is_root() {
         let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");
-        write_atomic(&opts.out_dir.join("summary.json"), &json)?;
+        write_atomic(&out_dir.join("summary.json"), &json)?;
     }
     Ok(summary)
 }

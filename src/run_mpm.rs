@@ -2,9 +2,10 @@
 //! the solver's timed stages (sort, P2G with the strip exchange, grid, stress, G2P,
 //! migration) plus output, and at the end the analyses, checks and `summary.json`.
 
-use crate::driver::{RunHeader, Signals};
+use crate::driver::{RunHeader, StageClock};
 use crate::progress::Progress;
-use crate::run::{stage_stats, RunError, RunOptions, Status};
+use crate::run::{RunError, RunOptions, Status};
+use crate::time_loop::{drive, particle_last_step, Due, Flow, LoopEnd, LoopPlan, Stepper};
 use analysis::checks::evaluate;
 use analysis::collapse::{
     collapse_results, thick_front, thick_front_results, PileShape, QUANTITIES, THICK_QUANTITIES,
@@ -14,10 +15,10 @@ use decomposition::Comm;
 use io::atomic::{ensure_writable_dir, write_atomic};
 use io::mpm_checkpoint::{self, MpmRunState};
 use io::mpm_out::{write_mpm_png, MpmWriter};
-use mpm::{MpmError, MpmSystem, Points, MPM_STAGES};
+use mpm::{MpmError, MpmSystem, Points, Totals, MPM_STAGES};
 use scene::{GrainAnalysis, MpmScene, PictureField, ValidMpmScene};
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Everything an MPM run's `summary.json` holds.
@@ -60,8 +61,9 @@ pub struct MpmSummary {
     pub snapshots: usize,
 }
 
-/// Names of the stages in `summary.json`: the solver's, then output.
-const STAGES: [&str; 7] = ["sort", "p2g", "grid", "stress", "g2p", "migrate", "output"];
+/// The stepper's own stage (the solver times [`MPM_STAGES`]; the driver output and
+/// checkpoints).
+const OBSERVE: [&str; 1] = ["observe"];
 
 /// Per background-cell column of the points on every rank (collective): the farthest point
 /// edge, the highest point edge and the highest point centre (m; −∞ when empty).
@@ -145,6 +147,101 @@ fn first_error(e: &MpmError, comm: &dyn Comm) -> String {
         .unwrap_or_else(|| e.to_string())
 }
 
+/// An MPM system as the driver's time loop steps it, with its output.
+pub struct MpmStepper<'a> {
+    scene: &'a ValidMpmScene,
+    out_dir: PathBuf,
+    /// The points and grid on this rank.
+    pub sys: MpmSystem,
+    writer: MpmWriter,
+    /// Top of the pictures' colour scale (m/s or plastic strain).
+    vmax: f64,
+    /// The column's length and height at the start (m), for a collapse analysis.
+    initial_shape: [f64; 2],
+    /// Simulated time after which the run may stop early (s): 10 % of the run.
+    settle_after_s: f64,
+    /// This rank's seconds in [`OBSERVE`].
+    clock: StageClock,
+}
+
+impl Stepper for MpmStepper<'_> {
+    fn steps_done(&self) -> u64 {
+        self.sys.steps
+    }
+
+    fn time_s(&self) -> f64 {
+        self.sys.time
+    }
+
+    fn advance(&mut self, comm: &dyn Comm) -> Flow {
+        match self.sys.step(comm) {
+            Ok(()) => Flow::Go,
+            Err(e) => Flow::Unstable(first_error(&e, comm)),
+        }
+    }
+
+    fn observe(&mut self, comm: &dyn Comm, due: Due) -> Result<Flow, RunError> {
+        if !due.step.is_multiple_of(100) && !due.last {
+            return Ok(Flow::Go);
+        }
+        let t = Instant::now();
+        let tot = self.sys.totals(comm)?;
+        let stop = self.scene.scene.run.stop_below_specific_kinetic_energy_j_kg;
+        let flow = if !tot.kinetic_energy.is_finite() {
+            Flow::Unstable(format!(
+                "step {}: the kinetic energy is not finite; reduce the Courant number",
+                due.step
+            ))
+        } else if stop > 0.0
+            && self.sys.time > self.settle_after_s
+            && tot.kinetic_energy / tot.mass < stop
+        {
+            Flow::Settled
+        } else {
+            Flow::Go
+        };
+        self.clock.add("observe", t);
+        Ok(flow)
+    }
+
+    fn snapshot(&mut self, comm: &dyn Comm) -> Result<(), RunError> {
+        self.writer.write(&self.sys, comm)?;
+        let out = &self.scene.scene.output;
+        if out.pictures() {
+            let name = format!("mpm_step_{:08}.png", self.sys.steps);
+            let path = self.out_dir.join("pictures").join(name);
+            write_mpm_png(&path, &self.sys, out.picture_field(), self.vmax, comm)?;
+        }
+        Ok(())
+    }
+
+    fn checkpoint(&mut self, comm: &dyn Comm, path: &Path, next: f64) -> Result<(), RunError> {
+        let mut migrated = [self.sys.migrated as f64];
+        comm.sum_f64(&mut migrated);
+        let state = MpmRunState {
+            step: self.sys.steps,
+            time_s: self.sys.time,
+            next_output_s: next,
+            migrated: migrated[0] as u64,
+            initial_shape_m: self.initial_shape,
+        };
+        mpm_checkpoint::write(path, comm, &self.sys, &state)?;
+        Ok(())
+    }
+}
+
+/// The wall and floor of the scene's column-collapse analysis, and its thick-front height.
+fn collapse_of(s: &MpmScene) -> (Option<(f64, f64)>, Option<f64>) {
+    match s.analyses.first() {
+        Some(GrainAnalysis::ColumnCollapse {
+            wall_x_m,
+            floor_y_m,
+            front_min_height_m,
+        }) => (Some((*wall_x_m, *floor_y_m)), *front_min_height_m),
+        None => (None, None),
+    }
+}
+
 /// Run an MPM scene on every rank of `comm` (collective). Writes `mpm.h5` + `mpm.xdmf`,
 /// `pictures/mpm_*.png` and (rank 0) `summary.json` into `opts.out_dir`.
 pub fn run_mpm(
@@ -163,20 +260,20 @@ pub fn run_mpm(
         None => None,
     };
     let spec = scene.setup.spec;
-    let (collapse, thick_min_height) = match s.analyses.first() {
-        Some(GrainAnalysis::ColumnCollapse {
-            wall_x_m,
-            floor_y_m,
-            front_min_height_m,
-        }) => (Some((*wall_x_m, *floor_y_m)), *front_min_height_m),
-        None => (None, None),
-    };
     let (points, resume) = match restored {
         Some(r) => (r.points, Some(r.run)),
         None => (scene.points.clone(), None),
     };
+    let last_step = particle_last_step(
+        (opts.steps, opts.end_time_s),
+        (s.run.steps, s.run.end_time_s),
+        scene.setup.dt,
+    );
+    let done = resume.map_or(0, |r| r.step);
+    let cost = crate::budget::mpm_cost(scene, last_step.saturating_sub(done));
+    crate::budget::admit(cost, comm.size(), opts.force)?;
     let mut sys = MpmSystem::new(scene.setup.clone(), points, comm)?;
-    let initial_shape = match (&resume, collapse) {
+    let initial_shape = match (&resume, collapse_of(s).0) {
         (Some(r), _) => r.initial_shape_m,
         (None, Some((wx, fy))) => {
             let cols = deposit_columns(&sys.points, spec.h, spec.nx, comm);
@@ -193,157 +290,101 @@ pub fn run_mpm(
         }
     }
     let start_totals = sys.totals(comm)?;
-    let mut writer = MpmWriter::open(&opts.out_dir, &sys, comm, resume.map(|r| r.step))?;
-    let field = s.run.picture_field;
+    let writer = MpmWriter::open(&opts.out_dir, &sys, comm, resume.map(|r| r.step))?;
     // Colour scale: free-fall speed over the domain height, or plastic strain 0–1.
     let g_abs = s.mpm.gravity_m_s2[0].hypot(s.mpm.gravity_m_s2[1]);
-    let vmax = match field {
+    let vmax = match s.output.picture_field() {
         PictureField::Speed => (2.0 * g_abs * spec.height()).sqrt().max(1e-9),
         PictureField::PlasticStrain => 1.0,
     };
-    let picture = |sys: &MpmSystem| -> Result<(), RunError> {
-        if s.run.pictures {
-            let name = format!("mpm_step_{:08}.png", sys.steps);
-            write_mpm_png(
-                &opts.out_dir.join("pictures").join(name),
-                sys,
-                field,
-                vmax,
-                comm,
-            )?;
-        }
-        Ok(())
-    };
-    if resume.is_none() {
-        writer.write(&sys, comm)?;
-        picture(&sys)?;
-    }
     let dt = sys.setup.dt;
-    let end_time = opts.end_time_s.unwrap_or(s.run.end_time_s);
-    let total_steps = opts.steps.unwrap_or((end_time / dt).ceil() as u64);
     let mut progress = Progress::new(
-        total_steps,
+        last_step,
         start_totals.points as f64,
         dt,
         opts.progress && comm.is_root(),
     )
     .with_unit("M point-steps/s");
-    let mut next_output = resume.map_or(s.run.output_every_s, |r| r.next_output_s);
-    let start_step = sys.steps;
-    let (mut status, mut error, mut stop_time) = (Status::Ok, None, None);
-    let signals = Signals::install();
-    let checkpoint_path = opts.out_dir.join("checkpoint.h5");
-    let mut checkpoints = Vec::new();
-    let write_checkpoint = |sys: &MpmSystem, next_output: f64, list: &mut Vec<PathBuf>| {
-        let mut migrated = [sys.migrated as f64];
-        comm.sum_f64(&mut migrated);
-        let state = MpmRunState {
-            step: sys.steps,
-            time_s: sys.time,
-            next_output_s: next_output,
-            migrated: migrated[0] as u64,
-            initial_shape_m: initial_shape,
-        };
-        mpm_checkpoint::write(&checkpoint_path, comm, sys, &state)?;
-        list.push(checkpoint_path.clone());
-        Ok::<(), RunError>(())
+    let plan = LoopPlan::new(
+        last_step,
+        &s.output,
+        &opts.out_dir,
+        resume.map(|r| r.next_output_s),
+    );
+    let mut stepper = MpmStepper {
+        scene,
+        out_dir: opts.out_dir.clone(),
+        sys,
+        writer,
+        vmax,
+        initial_shape,
+        settle_after_s: 0.1 * scene.end_time_s(),
+        clock: StageClock::new(&OBSERVE),
     };
-    let mut output_seconds = 0.0;
-    let t0 = Instant::now();
-    while sys.steps < total_steps {
-        if let Err(e) = sys.step(comm) {
-            status = Status::Unstable;
-            error = Some(first_error(&e, comm));
-            break;
-        }
-        let step = sys.steps;
-        let t = Instant::now();
-        if step % 100 == 0 || step == total_steps {
-            let tot = sys.totals(comm)?;
-            if !tot.kinetic_energy.is_finite() {
-                status = Status::Unstable;
-                error = Some(format!(
-                    "step {step}: the kinetic energy is not finite; reduce the Courant number"
-                ));
-                break;
-            }
-            let quiet = s.run.stop_below_specific_kinetic_energy_j_kg > 0.0
-                && sys.time > 0.1 * s.run.end_time_s
-                && tot.kinetic_energy / tot.mass < s.run.stop_below_specific_kinetic_energy_j_kg;
-            if quiet {
-                stop_time = Some(sys.time);
-                output_seconds += t.elapsed().as_secs_f64();
-                break;
-            }
-        }
-        if s.run.output_every_s > 0.0 && sys.time >= next_output {
-            next_output += s.run.output_every_s;
-            writer.write(&sys, comm)?;
-            picture(&sys)?;
-        }
-        // Signals are agreed on by all ranks after every step, so all ranks checkpoint (and
-        // stop) together.
-        let agreed = signals.agree(comm, false);
-        let every = s.run.checkpoint_every > 0 && step % s.run.checkpoint_every == 0;
-        if agreed.checkpoint || every {
-            write_checkpoint(&sys, next_output, &mut checkpoints)?;
-        }
-        output_seconds += t.elapsed().as_secs_f64();
-        if agreed.stop {
-            status = Status::Interrupted;
-            break;
-        }
-        progress.update(step);
-    }
-    progress.finish();
-    let wall = t0.elapsed().as_secs_f64();
-    if status == Status::Ok && s.run.checkpoint_at_end {
-        write_checkpoint(&sys, next_output, &mut checkpoints)?;
-    }
-    if status == Status::Ok {
-        let t = Instant::now();
-        writer.write(&sys, comm)?;
-        picture(&sys)?;
-        output_seconds += t.elapsed().as_secs_f64();
-    }
+    let end = drive(&mut stepper, &plan, &mut progress, comm)?;
+    summarise(scene, stepper, end, start_totals, comm, &opts.out_dir)
+}
+
+/// The column-collapse results of the deposit against the initial column.
+fn collapse_analysis(st: &MpmStepper, end: &LoopEnd, comm: &dyn Comm) -> Results {
     let mut results = Results::new();
-    if let (Some((wx, fy)), Status::Ok) = (collapse, status) {
-        let before = PileShape {
-            length_m: initial_shape[0],
-            height_m: initial_shape[1],
-        };
-        let cols = deposit_columns(&sys.points, spec.h, spec.nx, comm);
-        let after = deposit_shape(&cols, wx, fy, spec.h);
-        let values = collapse_results(before, after, g_abs, stop_time.unwrap_or(sys.time));
-        for (k, v) in QUANTITIES.iter().zip(values) {
+    let s = &st.scene.scene;
+    let (Some((wx, fy)), thick_min_height) = collapse_of(s) else {
+        return results;
+    };
+    let spec = st.scene.setup.spec;
+    let g_abs = s.mpm.gravity_m_s2[0].hypot(s.mpm.gravity_m_s2[1]);
+    let before = PileShape {
+        length_m: st.initial_shape[0],
+        height_m: st.initial_shape[1],
+    };
+    let cols = deposit_columns(&st.sys.points, spec.h, spec.nx, comm);
+    let after = deposit_shape(&cols, wx, fy, spec.h);
+    let values = collapse_results(before, after, g_abs, end.settled_s.unwrap_or(st.sys.time));
+    for (k, v) in QUANTITIES.iter().zip(values) {
+        results.insert(format!("collapse.{k}"), v);
+    }
+    if let Some(min_height) = thick_min_height {
+        let front = deposit_thick_front(&cols, wx, fy, spec.h, min_height);
+        for (k, v) in THICK_QUANTITIES
+            .iter()
+            .zip(thick_front_results(before, front))
+        {
             results.insert(format!("collapse.{k}"), v);
         }
-        if let Some(min_height) = thick_min_height {
-            let front = deposit_thick_front(&cols, wx, fy, spec.h, min_height);
-            for (k, v) in THICK_QUANTITIES
-                .iter()
-                .zip(thick_front_results(before, front))
-            {
-                results.insert(format!("collapse.{k}"), v);
-            }
-        }
     }
+    results
+}
+
+/// Analyses, checks and `summary.json` (rank 0) of a finished loop (collective).
+fn summarise(
+    scene: &ValidMpmScene,
+    mut st: MpmStepper,
+    end: LoopEnd,
+    start_totals: Totals,
+    comm: &dyn Comm,
+    out_dir: &Path,
+) -> Result<MpmSummary, RunError> {
+    let s = &scene.scene;
+    let mut status = end.status;
+    let results = if status == Status::Ok {
+        collapse_analysis(&st, &end, comm)
+    } else {
+        Results::new()
+    };
     let checks = evaluate(&s.checks, &results);
     if status == Status::Ok && checks.iter().any(|c| !c.passed) {
         status = Status::ChecksFailed;
     }
-    let mut local = sys.seconds.to_vec();
-    local.push(output_seconds);
-    let (stages, stage_seconds) = stage_stats(&STAGES, &local, comm);
-    let end = if status == Status::Unstable {
+    let end_totals = if status == Status::Unstable {
         start_totals
     } else {
-        sys.totals(comm)?
+        st.sys.totals(comm)?
     };
+    let sys = &st.sys;
     let mut counts = [sys.migrated as f64, sys.yielded as f64];
     comm.sum_f64(&mut counts);
     let comm_wait = comm.max_f64(sys.comm_seconds);
-    debug_assert_eq!(MPM_STAGES.len() + 1, STAGES.len());
     let mut header = RunHeader::new(
         "mpm",
         scene.path.clone(),
@@ -352,16 +393,18 @@ pub fn run_mpm(
         comm,
     );
     header.status = status;
-    header.error = error;
-    header.restarted_from_step = start_step;
+    header.error = end.error.clone();
+    header.restarted_from_step = end.start_step;
     header.steps = sys.steps;
     header.simulated_time_s = sys.time;
-    header.wall_time_s = wall;
-    header.stage_seconds = stage_seconds;
-    header.stages = stages;
-    header.checkpoints = checkpoints;
+    header.wall_time_s = end.wall_s;
+    let solver = StageClock::with_seconds(&MPM_STAGES, &sys.seconds);
+    header.set_stages(&[&solver, &st.clock, &end.clock], comm);
+    header.checkpoints = end.checkpoints.clone();
     header.results = results;
     header.checks = checks;
+    let spec = scene.setup.spec;
+    let steps = (sys.steps - end.start_step) as f64;
     let summary = MpmSummary {
         run: header,
         scene: s.clone(),
@@ -369,22 +412,21 @@ pub fn run_mpm(
         points: start_totals.points,
         cells: [spec.nx, spec.ny],
         cell_size_m: spec.h,
-        time_step_s: dt,
+        time_step_s: sys.setup.dt,
         critical_time_step_s: scene.critical_dt,
-        point_steps_per_s: start_totals.points as f64 * (sys.steps - start_step) as f64
-            / wall.max(1e-12),
+        point_steps_per_s: start_totals.points as f64 * steps / end.wall_s.max(1e-12),
         migrated: counts[0] as u64,
         rebalances: sys.rebalances,
         comm_wait_s: comm_wait,
-        mass_kg_m: [start_totals.mass, end.mass],
-        kinetic_energy_j_m: end.kinetic_energy,
-        momentum: end.momentum,
+        mass_kg_m: [start_totals.mass, end_totals.mass],
+        kinetic_energy_j_m: end_totals.kinetic_energy,
+        momentum: end_totals.momentum,
         yielding_points: counts[1] as u64,
-        snapshots: writer.snapshots(),
+        snapshots: st.writer.snapshots(),
     };
     if comm.is_root() {
         let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");
-        write_atomic(&opts.out_dir.join("summary.json"), &json)?;
+        write_atomic(&out_dir.join("summary.json"), &json)?;
     }
     Ok(summary)
 }

@@ -11,7 +11,8 @@ use lbm::gpu::{GpuContext, GpuFluid};
 use lbm::lattice::StepError;
 use lbm::{FluidBackend, Lattice, Real};
 use scene::{
-    build_lattice, solid_id_of, Backend, GpuStorage, Initial, Kernel, Probe, Units, ValidScene,
+    build_lattice, solid_id_of, Backend, BuiltGeometry, GpuStorage, Initial, Kernel, Probe, Units,
+    ValidScene,
 };
 use std::sync::Arc;
 use std::time::Instant;
@@ -26,15 +27,13 @@ pub fn in_place(kernel: Kernel, _grains: bool) -> bool {
 }
 
 /// Names of the stages of one step, in execution order.
-pub const STAGES: [&str; 8] = [
+pub const STAGES: [&str; 6] = [
     "collide-stream",
     "halo-wait",
     "coupling",
     "dem",
     "boundaries",
     "probes",
-    "output",
-    "checkpoint",
 ];
 /// Index of each stage in [`STAGES`].
 pub mod stage {
@@ -50,10 +49,6 @@ pub mod stage {
     pub const BOUNDARIES: usize = 4;
     /// Probe sampling and reduction.
     pub const PROBES: usize = 5;
-    /// Snapshots (fields, HDF5, pictures).
-    pub const OUTPUT: usize = 6;
-    /// Checkpoint writing.
-    pub const CHECKPOINT: usize = 7;
 }
 
 /// Accumulated wall time per stage.
@@ -118,6 +113,179 @@ pub struct Simulation<T: Real> {
     pub grains: Option<LbmDem>,
 }
 
+/// The probes' targets on the global lattice and their (empty) series, in scene order.
+#[allow(clippy::type_complexity)]
+fn probe_targets(
+    scene: &ValidScene,
+    built: &BuiltGeometry,
+) -> Result<(Vec<ProbeTarget>, Vec<Series>), RunError> {
+    let units = scene.units;
+    let mut targets = Vec::new();
+    let mut series = Vec::new();
+    for p in &scene.scene.probes {
+        match p {
+            Probe::Point { name, position_m } => {
+                let x = (position_m[0] / units.dx_m) as usize;
+                let y = (position_m[1] / units.dx_m) as usize;
+                if built.setup.cells[y * built.setup.nx + x] != 0 {
+                    return Err(scene
+                        .invalid(
+                            "position_m",
+                            format!(
+                                "probe `{name}` lies inside an obstacle; move it into the fluid"
+                            ),
+                        )
+                        .into());
+                }
+                targets.push(ProbeTarget::Cell(x, y));
+                series.push(Series::new(name, vec!["ux_m_s", "uy_m_s", "pressure_pa"]));
+            }
+            Probe::Force { name, obstacle } => {
+                let id = solid_id_of(&built.setup, obstacle).expect("validated");
+                targets.push(ProbeTarget::Solid(id));
+                series.push(Series::new(name, vec!["fx_n_per_m", "fy_n_per_m"]));
+            }
+            Probe::Deposit {
+                name,
+                wall_x_m,
+                floor_y_m,
+            } => {
+                targets.push(ProbeTarget::Deposit(*wall_x_m, *floor_y_m));
+                series.push(Series::new(name, vec!["front_m", "height_m"]));
+            }
+            Probe::Grain { name, id } => {
+                targets.push(ProbeTarget::Grain(*id));
+                let columns = vec![
+                    "x_m",
+                    "y_m",
+                    "vx_m_s",
+                    "vy_m_s",
+                    "omega_rad_s",
+                    "fx_n_per_m",
+                    "fy_n_per_m",
+                ];
+                series.push(Series::new(name, columns));
+            }
+        }
+    }
+    Ok((targets, series))
+}
+
+/// Columns split over the ranks of `comm` by fluid-cell count.
+fn partition_by_fluid(
+    scene: &ValidScene,
+    built: &BuiltGeometry,
+    comm: &dyn Comm,
+) -> Result<SlabPartition, RunError> {
+    let (gnx, ny) = (built.setup.nx, built.setup.ny);
+    let costs: Vec<f64> = (0..gnx)
+        .map(|x| {
+            let fluid = (0..ny)
+                .filter(|&y| built.setup.cells[y * gnx + x] == 0)
+                .count();
+            fluid.max(1) as f64
+        })
+        .collect();
+    SlabPartition::weighted(&costs, comm.size()).map_err(|e| {
+        scene
+            .invalid(
+                "cells",
+                format!("{e}; run on fewer ranks or use a wider lattice"),
+            )
+            .into()
+    })
+}
+
+/// This rank's slab in the scene's initial condition, boundaries applied.
+fn initial_lattice<T: Real>(
+    scene: &ValidScene,
+    built: &BuiltGeometry,
+    partition: &SlabPartition,
+    comm: &dyn Comm,
+    one_buffer: bool,
+) -> Lattice<T> {
+    let units = scene.units;
+    let (gnx, ny) = (built.setup.nx, built.setup.ny);
+    let mut lattice = if one_buffer {
+        Lattice::<T>::new_slab_one_buffer(&built.setup, partition, comm.rank())
+    } else {
+        Lattice::<T>::new_slab(&built.setup, partition, comm.rank())
+    };
+    let (x0, nx) = (lattice.x_offset(), lattice.nx());
+    match scene.scene.fluid.initial {
+        Initial::Rest => {}
+        Initial::Uniform { velocity_m_s } => {
+            let u = [
+                units.velocity_to_lattice(velocity_m_s[0]),
+                units.velocity_to_lattice(velocity_m_s[1]),
+            ];
+            for y in 0..ny {
+                for x in 0..nx {
+                    lattice.set_equilibrium(x, y, 1.0, u);
+                }
+            }
+        }
+        Initial::TaylorGreen { amplitude_m_s } => {
+            let u0 = units.velocity_to_lattice(amplitude_m_s);
+            for y in 0..ny {
+                for x in 0..nx {
+                    let (px, py) = ((x0 + x) as f64 + 0.5, y as f64 + 0.5);
+                    let u = taylor_green_velocity(gnx, ny, u0, units.nu_lattice, 0.0, px, py);
+                    // ρ = 1 + p/c_s² (lattice units).
+                    let rho = 1.0 + 3.0 * taylor_green_pressure(gnx, ny, u0, px, py);
+                    lattice.set_equilibrium(x, y, rho, u);
+                }
+            }
+        }
+    }
+    lattice.update_boundaries();
+    lattice
+}
+
+/// Every grain probe names a grain of the sample. Collective.
+fn check_grain_probes(
+    scene: &ValidScene,
+    targets: &[ProbeTarget],
+    c: &LbmDem,
+    comm: &dyn Comm,
+) -> Result<(), RunError> {
+    let probed: Vec<u64> = targets
+        .iter()
+        .filter_map(|t| match t {
+            ProbeTarget::Grain(id) => Some(*id),
+            _ => None,
+        })
+        .collect();
+    if probed.is_empty() {
+        return Ok(());
+    }
+    let ids: Vec<u64> = c.radii(comm).iter().map(|p| p.0).collect();
+    match probed.iter().find(|id| ids.binary_search(id).is_err()) {
+        Some(id) => Err(scene
+            .invalid(
+                "id",
+                format!(
+                    "grain probe names grain {id}, but the sample has grains 0..{}",
+                    ids.len()
+                ),
+            )
+            .into()),
+        None => Ok(()),
+    }
+}
+
+/// The longest inlet ramp of the scene's faces (s); 0 when none.
+fn inlet_ramp_s(scene: &ValidScene) -> f64 {
+    let b = &scene.scene.boundaries;
+    [&b.west, &b.east, &b.south, &b.north]
+        .iter()
+        .map(|f| match f {
+            scene::BoundarySpec::Velocity { ramp_time_s, .. } => *ramp_time_s,
+            _ => 0.0,
+        })
+        .fold(0.0, f64::max)
+}
+
 impl<T: Real> Simulation<T> {
     /// Allocate this rank's slab, rasterise obstacles, apply the initial condition, place
     /// probes, and move the slab to `backend`'s device. Columns are split over the ranks
@@ -133,106 +301,13 @@ impl<T: Real> Simulation<T> {
         let built = build_lattice(scene)?;
         let units = scene.units;
         let invalid = |key: &str, message: String| scene.invalid(key, message);
-        let mut targets = Vec::new();
-        let mut series = Vec::new();
-        for p in &scene.scene.probes {
-            match p {
-                Probe::Point { name, position_m } => {
-                    let x = (position_m[0] / units.dx_m) as usize;
-                    let y = (position_m[1] / units.dx_m) as usize;
-                    if built.setup.cells[y * built.setup.nx + x] != 0 {
-                        return Err(invalid(
-                            "position_m",
-                            format!(
-                                "probe `{name}` lies inside an obstacle; move it into the fluid"
-                            ),
-                        )
-                        .into());
-                    }
-                    targets.push(ProbeTarget::Cell(x, y));
-                    series.push(Series::new(name, vec!["ux_m_s", "uy_m_s", "pressure_pa"]));
-                }
-                Probe::Force { name, obstacle } => {
-                    let id = solid_id_of(&built.setup, obstacle).expect("validated");
-                    targets.push(ProbeTarget::Solid(id));
-                    series.push(Series::new(name, vec!["fx_n_per_m", "fy_n_per_m"]));
-                }
-                Probe::Deposit {
-                    name,
-                    wall_x_m,
-                    floor_y_m,
-                } => {
-                    targets.push(ProbeTarget::Deposit(*wall_x_m, *floor_y_m));
-                    series.push(Series::new(name, vec!["front_m", "height_m"]));
-                }
-                Probe::Grain { name, id } => {
-                    targets.push(ProbeTarget::Grain(*id));
-                    series.push(Series::new(
-                        name,
-                        vec![
-                            "x_m",
-                            "y_m",
-                            "vx_m_s",
-                            "vy_m_s",
-                            "omega_rad_s",
-                            "fx_n_per_m",
-                            "fy_n_per_m",
-                        ],
-                    ));
-                }
-            }
-        }
-        let (gnx, ny) = (built.setup.nx, built.setup.ny);
-        let costs: Vec<f64> = (0..gnx)
-            .map(|x| {
-                let fluid = (0..ny)
-                    .filter(|&y| built.setup.cells[y * gnx + x] == 0)
-                    .count();
-                fluid.max(1) as f64
-            })
-            .collect();
-        let partition = SlabPartition::weighted(&costs, comm.size()).map_err(|e| {
-            invalid(
-                "cells",
-                format!("{e}; run on fewer ranks or use a wider lattice"),
-            )
-        })?;
+        let (targets, series) = probe_targets(scene, &built)?;
+        let ny = built.setup.ny;
+        let partition = partition_by_fluid(scene, &built, comm)?;
         // A lattice that goes in place below never needs the two-array kernel's second buffer.
         let goes_in_place =
             backend == Backend::Cpu && in_place(kernel, scene.scene.grains.is_some());
-        let mut lattice = if goes_in_place {
-            Lattice::<T>::new_slab_one_buffer(&built.setup, &partition, comm.rank())
-        } else {
-            Lattice::<T>::new_slab(&built.setup, &partition, comm.rank())
-        };
-        let (x0, nx) = (lattice.x_offset(), lattice.nx());
-        match scene.scene.fluid.initial {
-            Initial::Rest => {}
-            Initial::Uniform { velocity_m_s } => {
-                let u = [
-                    units.velocity_to_lattice(velocity_m_s[0]),
-                    units.velocity_to_lattice(velocity_m_s[1]),
-                ];
-                for y in 0..ny {
-                    for x in 0..nx {
-                        lattice.set_equilibrium(x, y, 1.0, u);
-                    }
-                }
-            }
-            Initial::TaylorGreen { amplitude_m_s } => {
-                let u0 = units.velocity_to_lattice(amplitude_m_s);
-                for y in 0..ny {
-                    for x in 0..nx {
-                        let (px, py) = ((x0 + x) as f64 + 0.5, y as f64 + 0.5);
-                        let u = taylor_green_velocity(gnx, ny, u0, units.nu_lattice, 0.0, px, py);
-                        // ρ = 1 + p/c_s² (lattice units).
-                        let rho = 1.0 + 3.0 * taylor_green_pressure(gnx, ny, u0, px, py);
-                        lattice.set_equilibrium(x, y, rho, u);
-                    }
-                }
-            }
-        }
-        lattice.update_boundaries();
+        let mut lattice = initial_lattice::<T>(scene, &built, &partition, comm, goes_in_place);
         if goes_in_place {
             lattice.make_in_place();
         } else if kernel == Kernel::InPlace {
@@ -261,39 +336,12 @@ impl<T: Real> Simulation<T> {
                 comm,
                 restored,
             )?;
-            let probed: Vec<u64> = targets
-                .iter()
-                .filter_map(|t| match t {
-                    ProbeTarget::Grain(id) => Some(*id),
-                    _ => None,
-                })
-                .collect();
-            if !probed.is_empty() {
-                let ids: Vec<u64> = c.radii(comm).iter().map(|p| p.0).collect();
-                if let Some(id) = probed.iter().find(|id| ids.binary_search(id).is_err()) {
-                    return Err(invalid(
-                        "id",
-                        format!(
-                            "grain probe names grain {id}, but the sample has grains 0..{}",
-                            ids.len()
-                        ),
-                    )
-                    .into());
-                }
-            }
+            check_grain_probes(scene, &targets, &c, comm)?;
             fluid.update_boundaries();
             Some(c)
         } else {
             None
         };
-        let b = &scene.scene.boundaries;
-        let ramp_s = [&b.west, &b.east, &b.south, &b.north]
-            .iter()
-            .map(|f| match f {
-                scene::BoundarySpec::Velocity { ramp_time_s, .. } => *ramp_time_s,
-                _ => 0.0,
-            })
-            .fold(0.0, f64::max);
         let mut field_halo = SlabHalo::new(&partition, comm.rank(), false);
         field_halo.set_message_bytes(ny * 9);
         let edges: Vec<usize> = (0..comm.size())
@@ -306,6 +354,7 @@ impl<T: Real> Simulation<T> {
             && targets
                 .iter()
                 .any(|t| matches!(*t, ProbeTarget::Cell(x, _) if edges.contains(&x)));
+        let ramp_s = inlet_ramp_s(scene);
         let mut sim = Self {
             probe_on_rank_face,
             fluid,

@@ -180,8 +180,8 @@ fn check_on_unknown_quantity_is_rejected_before_running() {
 }
 
 /// A closed cavity at Re ≈ 16 000 on 16 × 8 cells (τ ≈ 0.5015, lid u_lb = 0.5, BGK, no
-/// closure), which cannot stay stable, with a snapshot every `output_every` steps.
-fn blow_up_scene(output_every: u64) -> String {
+/// closure), which cannot stay stable, with a snapshot every `every_steps` steps.
+fn blow_up_scene(every_steps: u64) -> String {
     GOOD.replace(
         "lattice_velocity = 0.05",
         "lattice_velocity = 0.5\nallow_high_mach = true",
@@ -197,7 +197,7 @@ fn blow_up_scene(output_every: u64) -> String {
     )
     .replace(
         "steps = 20",
-        &format!("steps = 5000\noutput_every = {output_every}"),
+        &format!("steps = 5000\n\n[output]\nevery_steps = {every_steps}"),
     )
 }
 
@@ -205,8 +205,8 @@ fn blow_up_scene(output_every: u64) -> String {
 /// cell, writes a summary with status "unstable", and keeps every snapshot before the
 /// failure and the last good state (each step's once: a snapshot written again would make
 /// HDF5 refuse the group and end the run with an output error).
-fn blow_up_keeps_output(output_every: u64) {
-    let (code, text, d) = grainflow(&blow_up_scene(output_every), &[]);
+fn blow_up_keeps_output(every_steps: u64) {
+    let (code, text, d) = grainflow(&blow_up_scene(every_steps), &[]);
     assert_eq!(code, 3, "{text}");
     assert!(
         text.contains("unstable at step") && text.contains("cell ("),
@@ -224,7 +224,7 @@ fn blow_up_keeps_output(output_every: u64) {
         .unwrap()
         .count() as u64;
     assert!(
-        pics >= 2 * (steps / output_every + 1),
+        pics >= 2 * (steps / every_steps + 1),
         "{pics} pictures for {steps} steps"
     );
 }

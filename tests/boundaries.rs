@@ -22,6 +22,7 @@ initial = {initial}
 {boundaries}
 [run]
 steps = 400
+[output]
 pictures = false
 {extra}"#
     )

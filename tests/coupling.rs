@@ -70,8 +70,9 @@ north = {{ kind = "wall" }}
 
 [run]
 steps = 3000
-output_every = 0
-probe_every = 3000
+
+[output]
+probe_every_steps = 3000
 {body}"#
     )
 }
@@ -143,7 +144,6 @@ scheme = "{scheme}"
 
 [run]
 steps = 10000
-output_every = 0
 
 [[analyses]]
 kind = "momentum-balance"
@@ -392,8 +392,8 @@ fn after_the_tumble_the_leader_falls_at_the_lone_disk_speed() {
 fn coupled_output_has_fluid_and_grains() {
     let dir = tempfile::tempdir().unwrap();
     let text = momentum_box("psm").replace(
-        "steps = 10000\noutput_every = 0",
-        "steps = 200\noutput_every = 100",
+        "steps = 10000\n",
+        "steps = 200\n\n[output]\nevery_steps = 100\n",
     );
     let (s, out) = run_text(&text, dir.path(), None);
     assert_eq!(s.run.status, Status::Ok, "{:?}", s.run.error);
@@ -434,7 +434,7 @@ fn coupled_results_do_not_depend_on_the_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     for scheme in ["bounce-back", "interpolated", "psm"] {
         let text = momentum_box(scheme)
-            .replace("steps = 10000", "steps = 600\nprobe_every = 50")
+            .replace("steps = 10000", "steps = 600\n\n[output]\nprobe_every_steps = 50")
             .replace("[[analyses]]\nkind = \"momentum-balance\"\n", "")
             + "\n[[probes]]\nkind = \"grain\"\nname = \"g0\"\nid = 0\n\n[[probes]]\nkind = \"grain\"\nname = \"g1\"\nid = 1\n";
         let run = |threads: usize| {

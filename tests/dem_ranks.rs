@@ -125,7 +125,7 @@ fn grains_checkpoint_restarts_on_another_rank_count_bit_identically() {
     let one = tmp.path().join("r1");
     run(1, &one);
     let text = std::fs::read_to_string(root().join(SCENE)).unwrap();
-    let with_checkpoints = text.replace("[run]\n", "[run]\ncheckpoint_every = 3000\n");
+    let with_checkpoints = text.replace("[output]\n", "[output]\ncheckpoint_every_steps = 3000\n");
     assert_ne!(text, with_checkpoints);
     let scene = tmp.path().join("checkpointed.toml");
     std::fs::write(&scene, with_checkpoints).unwrap();

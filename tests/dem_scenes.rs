@@ -66,9 +66,8 @@ fn refused_by(cmd: &str, scene: &str, expect: &[&str]) {
 }
 
 const GOOD: &str = r#"
-[region]
-min_m = [0.0, 0.0]
-max_m = [0.1, 0.1]
+[domain]
+size_m = [0.1, 0.1]
 [grains]
 density_kg_m3 = 2500.0
 [grains.contact]
@@ -124,7 +123,7 @@ fn bad_grains_scenes_name_the_field() {
     // With [fluid] it is a coupled scene, which needs the fluid's tables and [coupling].
     refused(
         &format!("{GOOD}[fluid]\n"),
-        &["missing field", "runs coupled", "[coupling]"],
+        &["size_m", "runs coupled", "[coupling]"],
     );
     refused(
         &format!("{GOOD}[[analyses]]\nkind = \"column-collapse\"\nwall_x_m = 0.0\nfloor_y_m = 0.0\nfront_min_height_m = 0.005\n"),

@@ -166,6 +166,7 @@ fn run_on(path: &Path, backend: Backend, precision: Precision) -> grainflow::run
         backend: Some(backend),
         gpu_storage: None,
         kernel: None,
+        force: false,
     };
     run(&scene, &opts).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -343,6 +344,7 @@ fn fp16_storage_without_gpu_f32_is_refused() {
             backend: Some(backend),
             gpu_storage: Some(GpuStorage::F16),
             kernel: None,
+            force: false,
         };
         let e = match run(&scene, &opts) {
             Ok(_) => panic!("FP16 storage on {backend:?} {precision:?} was accepted"),

@@ -63,6 +63,7 @@ fn coupled_gpu_blow_up_names_the_cpus_step_cell_and_grain() {
                 backend: Some(backend),
                 gpu_storage: None,
                 kernel: Some(Kernel::TwoArray),
+                force: false,
             };
             let s = run(&scene, &opts).unwrap_or_else(|e| panic!("{e}"));
             assert_eq!(s.run.status, Status::Unstable, "{scheme} on {backend:?}");

@@ -54,7 +54,6 @@ scheme = "bounce-back"
 
 [run]
 steps = 300
-output_every = 0
 "#;
 
 #[test]

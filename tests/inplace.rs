@@ -12,7 +12,7 @@ use std::path::Path;
 /// The scene with a snapshot every 7 steps (odd and even steps), written into `dir`.
 fn every_7(scene: &str, dir: &Path) -> String {
     let text = std::fs::read_to_string(common::root().join(scene)).unwrap();
-    let text = regex_free_replace(&text, "output_every", "output_every = 7");
+    let text = regex_free_replace(&text, "every_steps", "every_steps = 7");
     let path = dir.join(Path::new(scene).file_name().unwrap());
     std::fs::write(&path, text).unwrap();
     path.to_str().unwrap().to_owned()
@@ -61,7 +61,11 @@ fn checkpoints_move_between_the_kernels() {
     let d = tempfile::tempdir().unwrap();
     let text =
         std::fs::read_to_string(common::root().join("tests/scenes/mpi_channel.toml")).unwrap();
-    let text = regex_free_replace(&text, "checkpoint_every", "checkpoint_every = 67");
+    let text = regex_free_replace(
+        &text,
+        "checkpoint_every_steps",
+        "checkpoint_every_steps = 67",
+    );
     let path = d.path().join("channel.toml");
     std::fs::write(&path, text).unwrap();
     let scene = path.to_str().unwrap();

@@ -162,7 +162,10 @@ fn coupled_restart_on_another_rank_count_continues_bit_identically() {
         let split = d.path().join(format!("{scheme}-split"));
         run_ok(2, &scene, &split, &["--steps", "400"]);
         let ck = split.join("checkpoint.h5");
-        assert!(ck.is_file(), "checkpoint_every = 200 wrote checkpoint.h5");
+        assert!(
+            ck.is_file(),
+            "checkpoint_every_steps = 200 wrote checkpoint.h5"
+        );
         run_ok(3, &scene, &split, &["--restart", ck.to_str().unwrap()]);
         assert_eq!(summary(&split)["restarted_from_step"], 400);
         assert_bit_identical(&full, &split);

@@ -64,7 +64,10 @@ fn restart_on_another_rank_count_continues_bit_identically() {
     let split = d.path().join("split");
     run_ok(2, scene, &split, &["--steps", "200"]);
     let ck = split.join("checkpoint.h5");
-    assert!(ck.is_file(), "checkpoint_every = 100 wrote checkpoint.h5");
+    assert!(
+        ck.is_file(),
+        "checkpoint_every_steps = 100 wrote checkpoint.h5"
+    );
     assert!(
         !split.join("checkpoint.h5.tmp").exists(),
         "no temporary file left"
@@ -88,8 +91,21 @@ fn truncated_or_mismatched_checkpoint_is_refused_clearly() {
     let bytes = std::fs::read(&ck).unwrap();
     let cut = d.path().join("cut.h5");
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    // 4 KiB of flipped bytes in the middle: the digest no longer matches.
+    let flipped = d.path().join("flipped.h5");
+    let mut bad = bytes.clone();
+    let mid = bad.len() / 2;
+    for b in &mut bad[mid..mid + 4096] {
+        *b ^= 0xa5;
+    }
+    std::fs::write(&flipped, &bad).unwrap();
     for (scene, file, needle) in [
         ("tests/scenes/mpi_channel.toml", &cut, "truncated"),
+        (
+            "tests/scenes/mpi_channel.toml",
+            &flipped,
+            "contents changed",
+        ),
         (
             "tests/scenes/mpi_periodic.toml",
             &ck,
@@ -254,7 +270,7 @@ fn probes_next_to_rank_faces_match_one_rank() {
             columns.extend([x0 - 1, x0]);
         }
     }
-    let mut text = base.replace("output_every = 100", "output_every = 0");
+    let mut text = base.replace("\nevery_steps = 100\n", "\n");
     for x in &columns {
         // Cell centres at y = 0.35 m (fluid, between the cylinder and the lid).
         text += &format!(

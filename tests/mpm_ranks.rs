@@ -147,8 +147,8 @@ fn mpm_apic_walls_mu_i_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
     // μ(I) friction.
     let with_ckpt = text
         .replace(
-            "output_every_s = 0.04",
-            "output_every_s = 0.04\ncheckpoint_every = 1200",
+            "every_s = 0.04",
+            "every_s = 0.04\ncheckpoint_every_steps = 1200",
         )
         .replace(
             "separation_volume_ratio = 1.15",
@@ -162,7 +162,7 @@ fn mpm_apic_walls_mu_i_checkpoint_on_2_ranks_restarts_on_3_bit_for_bit() {
         );
     assert!(
         with_ckpt.contains("apic")
-            && with_ckpt.contains("checkpoint_every")
+            && with_ckpt.contains("checkpoint_every_steps")
             && with_ckpt.contains("side_walls")
             && with_ckpt.contains("inertial_friction")
     );

@@ -158,13 +158,10 @@ fn bad_mpm_scenes_name_the_field() {
         good.replacen(from, to, 1)
     };
     refused(
-        &bad("cell_size_m = 0.003", "cell_size_m = 0.003\ncell_size = 1"),
+        &bad("spacing_m = 0.003", "spacing_m = 0.003\ncell_size = 1"),
         &["unknown field", "cell_size"],
     );
-    refused(
-        &bad("domain_m = [0.24, 0.072]", "domain_m = [0.2405, 0.072]"),
-        &["domain_m", "whole number"],
-    );
+    refused(&bad("cells = [80, 24]", "cells = [80.5, 24]"), &["cells"]);
     refused(
         &bad("poisson_ratio = 0.3", "poisson_ratio = 0.5"),
         &["poisson_ratio"],
@@ -213,7 +210,7 @@ fn bad_mpm_scenes_name_the_field() {
     );
     refused(
         &bad("friction = 0.46 }", "friction = -1 }"),
-        &["left", "friction"],
+        &["west", "friction"],
     );
     let mu_i = "inertial_friction = { limit_friction_deg = 32.76, reference_inertial_number = 0.279, grain_diameter_m = 1.15e-3, grain_density_kg_m3 = 2500.0 }";
     let with = |text: &str| {

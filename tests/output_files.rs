@@ -9,7 +9,7 @@ fn snapshots_probes_and_summary() {
         "jobs/obstacle/scene.toml",
         &[
             ("end_time_s = 150.0", "end_time_s = 8.0"),
-            ("output_every = 3000", "output_every = 400"),
+            ("every_steps = 3000", "every_steps = 400"),
             ("min = 0.04", "min = 0.0"),
         ],
     );
@@ -75,7 +75,10 @@ fn snapshots_probes_and_summary() {
     }
     assert!(j["units"]["tau"].as_f64().unwrap() > 0.5);
     let stages = j["stages"].as_object().unwrap();
-    assert_eq!(stages.len(), grainflow::simulation::STAGES.len());
+    assert_eq!(
+        stages.len(),
+        grainflow::simulation::STAGES.len() + grainflow::time_loop::LOOP_STAGES.len()
+    );
     for (name, st) in stages {
         let (min, mean, max) = (
             st["min_s"].as_f64().unwrap(),

@@ -27,9 +27,8 @@ def scene(a, L, mu_r, seed=1):
 # behind the gate, trimmed flat at H_i = {H*1000:.1f} mm; the gate is removed at t = 0.
 title = "column collapse a = {a}"
 
-[region]
-min_m = [0.0, 0.0]
-max_m = [{floor:.4f}, {max(pack_h, 0.05)*1.05:.4f}]
+[domain]
+size_m = [{floor:.4f}, {max(pack_h, 0.05)*1.05:.4f}]
 
 [grains]
 density_kg_m3 = 2500.0
@@ -76,8 +75,10 @@ remove_at_s = 0.0
 
 [run]
 end_time_s = {end:.3f}
-output_every_s = {end/10:.4f}
 stop_below_kinetic_energy_j_m = 1e-9
+
+[output]
+every_s = {end/10:.4f}
 
 [[analyses]]
 kind = "column-collapse"

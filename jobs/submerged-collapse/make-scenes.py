@@ -120,8 +120,10 @@ scheme = "psm"
 
 [run]
 end_time_s = {end:.3f}
-output_every = {max(1, round(end / dt / 10))}
-probe_every = {max(1, round(0.005 / dt))}
+
+[output]
+every_steps = {max(1, round(end / dt / 10))}
+probe_every_steps = {max(1, round(0.005 / dt))}
 pictures = true
 
 [[probes]]
@@ -152,15 +154,16 @@ def dry(a, L, packing, dx):
 # air: the reference the submerged run-out is compared with. Written by make-scenes.py.
 title = "dry column collapse a = {a}, {packing}"
 
-[region]
-min_m = [0.0, 0.0]
-max_m = [{floor:.4f}, {top:.4f}]
+[domain]
+size_m = [{floor:.4f}, {top:.4f}]
 
 {grains_block(a, L, packing, floor, top)}
 [run]
 end_time_s = {end:.3f}
-output_every_s = {end/10:.4f}
 stop_below_kinetic_energy_j_m = 1e-9
+
+[output]
+every_s = {end/10:.4f}
 
 [[analyses]]
 kind = "column-collapse"

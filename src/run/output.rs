@@ -34,16 +34,22 @@ impl Output {
         comm: &dyn Comm,
         resume_after: Option<u64>,
     ) -> Result<Self, OutputError> {
-        if scene.scene.run.pictures && comm.is_root() {
+        if scene.scene.output.pictures() && comm.is_root() {
             let pics = dir.join("pictures");
             std::fs::create_dir_all(&pics)
                 .map_err(|source| OutputError::Io { path: pics, source })?;
         }
         Ok(Self {
             dir: dir.to_owned(),
-            h5: SnapshotWriter::open(dir, comm, layout, scene.scene.run.compression, resume_after)?,
-            fields: scene.scene.run.fields.clone(),
-            pictures: scene.scene.run.pictures,
+            h5: SnapshotWriter::open(
+                dir,
+                comm,
+                layout,
+                scene.scene.output.compression(),
+                resume_after,
+            )?,
+            fields: scene.scene.output.fields(),
+            pictures: scene.scene.output.pictures(),
             bytes: 0,
             write_s: 0.0,
             grains: match scene.scene.grains {

@@ -75,6 +75,23 @@ pub(crate) fn prepare(scene: &ValidGrainScene, comm: &dyn Comm) -> Result<(Grain
             settle.clone(),
         ),
     };
+    let size = s.domain.size();
+    let outside = (0..grains.len()).find(|&i| {
+        let (x, y, r) = (grains.x[i], grains.y[i], grains.r[i]);
+        !(x - r >= 0.0 && x + r <= size[0] && y - r >= 0.0 && y + r <= size[1])
+    });
+    if let Some(i) = outside {
+        return Err(scene
+            .invalid(
+                "file",
+                format!(
+                    "grain {i} of the sample at ({}, {}) m with radius {} m is not wholly \
+                     inside the domain [0, 0]–{size:?} m",
+                    grains.x[i], grains.y[i], grains.r[i]
+                ),
+            )
+            .into());
+    }
     if grains.is_empty() {
         return Err(DemError::Parameter {
             name: "sample",
@@ -97,11 +114,19 @@ pub(crate) fn prepare(scene: &ValidGrainScene, comm: &dyn Comm) -> Result<(Grain
     }
     let mut steps = 0;
     let n = d.global_count(comm) as f64;
+    let signals = crate::driver::Signals::install();
     loop {
         for _ in 0..100 {
             d.step(comm);
         }
         steps += 100;
+        // SIGTERM while settling ends the run before its first step: nothing to keep.
+        if signals.agree(comm, false).stop {
+            return Err(RunError::Interrupted(format!(
+                "stopped by SIGTERM while settling the sample (step {steps}), before the run's \
+                 first step: nothing was computed and no checkpoint written"
+            )));
+        }
         let (ke, _, _) = global_state(&d, comm);
         if ke / n < st.kinetic_energy_per_grain_j_m {
             break;
@@ -131,6 +156,15 @@ pub(crate) fn prepare(scene: &ValidGrainScene, comm: &dyn Comm) -> Result<(Grain
         p[9] = f64::from_bits(g.len() as u64);
         g.push_row(&p);
     }
+    if g.is_empty() {
+        return Err(DemError::Parameter {
+            name: "trim_above_m",
+            value: st.trim_above_m.unwrap_or(f64::NAN),
+            why: "trimming removed every settled grain: set trim_above_m above the settled \
+                  layer's bottom",
+        }
+        .into());
+    }
     Ok((g, steps))
 }
 
@@ -139,13 +173,7 @@ pub(super) fn bounds_for(scene: &ValidGrainScene, grains: &Grains, comm: &dyn Co
     let s = &scene.scene;
     let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
     let cutoff = 2.0 * rmax + DemSystem::skin_for(rmax);
-    balanced_bounds(
-        &grains.x,
-        s.region.min_m[0],
-        s.region.max_m[0],
-        comm.size(),
-        cutoff,
-    )
+    balanced_bounds(&grains.x, 0.0, s.domain.size()[0], comm.size(), cutoff)
 }
 
 /// A distributed system of `grains` with the scene's walls and contacts.

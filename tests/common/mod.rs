@@ -52,6 +52,7 @@ fn run_valid(
         backend: None,
         gpu_storage: None,
         kernel: None,
+        force: false,
     };
     let s = run(scene, &opts).unwrap_or_else(|e| panic!("{e}"));
     (s, out)

@@ -18,7 +18,7 @@ use dem::{DemError, DemSetup, DemSystem, Grains, SlabDem};
 use lbm::lattice::{Face, FaceCondition};
 use lbm::moving::{MovingCells, PlanKind};
 use lbm::units::Units;
-use lbm::{FluidBackend, Real};
+use lbm::{FluidBackend, Lattice, Real};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -153,6 +153,62 @@ pub enum SetupError {
     Dem(#[from] DemError),
 }
 
+/// The x-boundaries of the ranks' slabs (m), from the fluid's column partition.
+fn slab_bounds_m(partition: &SlabPartition, dx_m: f64, comm: &dyn Comm) -> Vec<f64> {
+    (0..=comm.size())
+        .map(|r| {
+            let x = if r < comm.size() {
+                partition.slab(r).x_begin
+            } else {
+                partition.columns()
+            };
+            x as f64 * dx_m
+        })
+        .collect()
+}
+
+/// How far beyond its slab a rank must see grains (m): a neighbour sees a grain that
+/// reaches its cells (two cells beyond the radius, plus the halo column) or that can repel
+/// one of its grains (`range`). An error when a slab is narrower than a grain's reach.
+fn grain_reach(
+    rmax: f64,
+    range: f64,
+    dx_m: f64,
+    partition: &SlabPartition,
+    comm: &dyn Comm,
+) -> Result<f64, SetupError> {
+    let margin = (3.0 * dx_m).max(rmax + range + DemSystem::skin_for(rmax) + dx_m);
+    let narrowest = (0..comm.size())
+        .map(|r| partition.slab(r).width())
+        .min()
+        .unwrap_or(0) as f64
+        * dx_m;
+    if comm.size() > 1 && narrowest < 2.0 * rmax + margin {
+        return Err(SetupError::Invalid {
+            key: "ranks",
+            message: format!(
+                "a fluid slab is {narrowest} m wide, narrower than a grain's reach \
+                 ({:.3e} m): run on fewer ranks",
+                2.0 * rmax + margin
+            ),
+        });
+    }
+    Ok(margin)
+}
+
+/// This rank's slab of the lattice as the coupling sees it.
+fn slab_frame<T: Real>(lat: &Lattice<T>, faces: &[FaceCondition; 4]) -> SlabFrame {
+    SlabFrame {
+        nx: lat.nx(),
+        ny: lat.ny(),
+        x0: lat.x_offset(),
+        global_nx: lat.global_nx(),
+        stride: lat.stride(),
+        periodic_x: faces[Face::West as usize] == FaceCondition::Periodic,
+        periodic_y: faces[Face::South as usize] == FaceCondition::Periodic,
+    }
+}
+
 impl LbmDem {
     /// Add a DEM wall on every wall face of the fluid (`faces`: the whole lattice's) to
     /// the walls of `setup`, spread `grains` (every grain, sorted by id: the prepared sample
@@ -185,16 +241,7 @@ impl LbmDem {
         let along_faces = fluid_walls(faces, domain, face_wall_friction, &dem_setup.walls);
         dem_setup.walls.extend(along_faces);
         let gravity = dem_setup.gravity;
-        let bounds: Vec<f64> = (0..=comm.size())
-            .map(|r| {
-                let x = if r < comm.size() {
-                    partition.slab(r).x_begin
-                } else {
-                    partition.columns()
-                };
-                x as f64 * units.dx_m
-            })
-            .collect();
+        let bounds = slab_bounds_m(partition, units.dx_m, comm);
         let rmax = grains.r.iter().cloned().fold(0.0, f64::max);
         let fresh = restored.is_none();
         let (mut dem, per_grain) = match restored {
@@ -214,35 +261,10 @@ impl LbmDem {
         dem.rebalance_every = 0;
         dem.system.enable_carry(CARRY);
         let range = repulsion.map_or(0.0, |r| r.0);
-        // A neighbour sees a grain that reaches its cells (two cells beyond the radius, plus
-        // the halo column) or that can repel one of its grains.
-        let margin = (3.0 * units.dx_m).max(rmax + range + DemSystem::skin_for(rmax) + units.dx_m);
-        let narrowest = (0..comm.size())
-            .map(|r| partition.slab(r).width())
-            .min()
-            .unwrap_or(0) as f64
-            * units.dx_m;
-        if comm.size() > 1 && narrowest < 2.0 * rmax + margin {
-            return Err(SetupError::Invalid {
-                key: "ranks",
-                message: format!(
-                    "a fluid slab is {narrowest} m wide, narrower than a grain's reach \
-                     ({:.3e} m): run on fewer ranks",
-                    2.0 * rmax + margin
-                ),
-            });
-        }
+        let margin = grain_reach(rmax, range, units.dx_m, partition, comm)?;
         let lat = fluid.lattice();
-        let periodic_x = faces[Face::West as usize] == FaceCondition::Periodic;
-        let frame = SlabFrame {
-            nx: lat.nx(),
-            ny: lat.ny(),
-            x0: lat.x_offset(),
-            global_nx: lat.global_nx(),
-            stride: lat.stride(),
-            periodic_x,
-            periodic_y: faces[Face::South as usize] == FaceCondition::Periodic,
-        };
+        let frame = slab_frame(lat, faces);
+        let periodic_x = frame.periodic_x;
         let halo = GrainHalo::new(partition, comm.rank(), units.dx_m, periodic_x, margin);
         let owned = dem.system.owned();
         let mut me = Self {

@@ -30,13 +30,24 @@ impl CellList {
                 })
         };
         let ((x0, x1), (y0, y1)) = (fold(&g.x), fold(&g.y));
+        // Grains flung to infinity (a run going unstable) share one cell rather than
+        // overflow the grid; the run's energy check then stops it.
+        let (x1, y1) = (
+            if (x1 - x0).is_finite() { x1 } else { x0 },
+            if (y1 - y0).is_finite() { y1 } else { y0 },
+        );
         let mut size = min_size;
-        let cells = |s: f64| (((x1 - x0) / s) as usize + 1) * (((y1 - y0) / s) as usize + 1);
+        let cells = |s: f64| {
+            let along = |span: f64| ((span / s) as usize).saturating_add(1);
+            along(x1 - x0).saturating_mul(along(y1 - y0))
+        };
         while cells(size) > 4 * n + 64 {
             size *= 2.0;
         }
         let nx = ((x1 - x0) / size) as usize + 1;
         let ny = ((y1 - y0) / size) as usize + 1;
+        // NaN and infinite positions fall in cell 0 or the last column/row (`as usize`
+        // saturates), never outside the grid.
         let cell_of = |i: usize| {
             let cx = (((g.x[i] - x0) / size) as usize).min(nx - 1);
             let cy = (((g.y[i] - y0) / size) as usize).min(ny - 1);

@@ -101,7 +101,8 @@ pub fn write_atomically(
         source,
     };
     {
-        let (file, access) = h5par::create(&tmp, comm).map_err(h5)?;
+        let (file, access) =
+            h5par::create_with_user_block(&tmp, comm, super::digest::USER_BLOCK).map_err(h5)?;
         fill(&file, access).map_err(h5)?;
         file.flush().map_err(h5)?;
         // Every group and dataset is closed by now: MPI-IO files refuse to close otherwise.
@@ -110,8 +111,10 @@ pub fn write_atomically(
     comm.barrier();
     let mut status = Ok(());
     if comm.is_root() {
-        // fsync the data, then rename: the new name appears only for a complete file.
-        status = std::fs::File::open(&tmp)
+        // Seal it with the digest of its bytes, fsync, then rename: the new name appears
+        // only for a complete file that a restart can verify.
+        status = super::digest::seal(&tmp)
+            .and_then(|_| std::fs::File::open(&tmp))
             .and_then(|f| f.sync_all())
             .and_then(|_| std::fs::rename(&tmp, path))
             .map_err(|source| OutputError::Io {
@@ -233,6 +236,7 @@ pub fn read<T: H5Type + Copy + Default>(
             "no such file; give the path of a checkpoint.h5 written by `grainflow run`",
         ));
     }
+    super::digest::verify(path, comm)?;
     let unreadable = |e: hdf5::Error| {
         err(
             path,
@@ -444,6 +448,7 @@ pub fn open_checked<'a>(
             format!("no such file; give the checkpoint.h5 of {run} run"),
         ));
     }
+    super::digest::verify(path, comm)?;
     let bad = |e: hdf5::Error| {
         err(
             path,

@@ -42,6 +42,31 @@ pub fn create(path: &Path, comm: &dyn Comm) -> hdf5::Result<(hdf5::File, Access)
     }
 }
 
+/// Create (truncate) `path` for every rank of `comm`, its first `user_block` bytes left to
+/// the application (a power of two ≥ 512). Collective.
+pub fn create_with_user_block(
+    path: &Path,
+    comm: &dyn Comm,
+    user_block: u64,
+) -> hdf5::Result<(hdf5::File, Access)> {
+    match access_of(comm).ok_or("several ranks without an MPI communicator")? {
+        (Access::Serial, _) => {
+            let f = hdf5::File::with_options()
+                .with_fcpl(|p| p.userblock(user_block))
+                .create(path)?;
+            Ok((f, Access::Serial))
+        }
+        (Access::Mpio, raw) => {
+            let raw = raw.expect("MPI-IO access has a communicator");
+            let f = hdf5::File::with_options()
+                .with_fcpl(|p| p.userblock(user_block))
+                .with_fapl(|p| p.mpio(raw, None))
+                .create(path)?;
+            Ok((f, Access::Mpio))
+        }
+    }
+}
+
 /// Open `path` read-only (`write = false`) or read-write on every rank of `comm`. Collective.
 pub fn open(path: &Path, comm: &dyn Comm, write: bool) -> hdf5::Result<(hdf5::File, Access)> {
     let mode = if write {

@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod checkpoint;
 pub mod colormap;
 pub mod coupled_checkpoint;
+pub mod digest;
 pub mod grains_checkpoint;
 pub mod grains_out;
 pub mod h5par;

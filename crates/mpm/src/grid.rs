@@ -59,9 +59,8 @@ pub enum Side {
     },
 }
 
-/// The four sides of the domain.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
+/// The four sides of the domain (the scene names them west, east, south, north).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Boundaries {
     /// x = 0.
     pub left: Side,

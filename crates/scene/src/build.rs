@@ -165,18 +165,18 @@ fn load_mask(path: &std::path::Path, nx: usize, ny: usize) -> Result<Vec<bool>, 
     let mut reader = decoder
         .read_info()
         .map_err(|e| format!("mask {} is not a readable PNG: {e}", path.display()))?;
+    // The size from the header, before a pixel buffer is allocated for it.
+    let (width, height) = (reader.info().width, reader.info().height);
+    if (width as usize, height as usize) != (nx, ny) {
+        return Err(format!(
+            "mask {} is {width}×{height} pixels; it must match the lattice, {nx}×{ny}",
+            path.display(),
+        ));
+    }
     let mut data = vec![0; reader.output_buffer_size().ok_or("mask too large")?];
     let info = reader
         .next_frame(&mut data)
         .map_err(|e| format!("mask {}: {e}", path.display()))?;
-    if (info.width as usize, info.height as usize) != (nx, ny) {
-        return Err(format!(
-            "mask {} is {}×{} pixels; it must match the lattice, {nx}×{ny}",
-            path.display(),
-            info.width,
-            info.height
-        ));
-    }
     let channels = info.color_type.samples();
     let mut mask = vec![false; nx * ny];
     for row in 0..ny {

@@ -75,6 +75,34 @@ pub(crate) fn validate_checks(checks: &[Check], ctx: &Context) -> Result<(), Sce
                 ),
             ));
         }
+        for (key, v) in [
+            ("tolerance", c.tolerance),
+            ("relative_tolerance", c.relative_tolerance),
+        ] {
+            if v.is_some_and(|t| !(t >= 0.0)) {
+                return Err(ctx.err(
+                    key,
+                    0,
+                    format!(
+                        "check on `{}`: {key} must be ≥ 0, got {}",
+                        c.quantity,
+                        v.unwrap_or(0.0)
+                    ),
+                ));
+            }
+        }
+        if let (Some(lo), Some(hi)) = (c.min, c.max) {
+            if lo > hi {
+                return Err(ctx.err(
+                    "min",
+                    0,
+                    format!(
+                        "check on `{}`: min ({lo}) is above max ({hi}); no value passes",
+                        c.quantity
+                    ),
+                ));
+            }
+        }
     }
     Ok(())
 }

@@ -3,8 +3,9 @@
 
 use super::context::Context;
 use super::coupling::{MIN_CELLS_PER_DIAMETER, WARN_CELLS_PER_DIAMETER};
-use super::grains::{GrainRun, GrainScene, GrainsSpec, Region, SampleSpec};
+use super::grains::{GrainRun, GrainScene, GrainsSpec, SampleSpec};
 use super::grains_check::{size_distribution, ValidGrainScene};
+use super::output::{GrainDomain, Output};
 use super::schema::{BoundarySpec, Scene};
 use super::{SceneError, Units};
 
@@ -20,22 +21,18 @@ pub fn grain_scene(
     ValidGrainScene {
         scene: GrainScene {
             title: scene.title.clone(),
-            region: Region {
-                min_m: [0.0, 0.0],
-                max_m: [
-                    d.cells[0] as f64 * d.spacing_m,
-                    d.cells[1] as f64 * d.spacing_m,
-                ],
+            domain: GrainDomain {
+                size_m: None,
+                cells: Some(d.cells),
+                spacing_m: Some(d.spacing_m),
             },
             grains: spec.clone(),
             run: GrainRun {
-                end_time_s: 1.0,
-                output_every_s: 0.0,
-                pictures: false,
+                steps: None,
+                end_time_s: Some(1.0),
                 stop_below_kinetic_energy_j_m: 0.0,
-                checkpoint_every: 0,
-                checkpoint_at_end: false,
             },
+            output: Output::default(),
             analyses: Vec::new(),
             checks: Vec::new(),
         },
@@ -99,9 +96,8 @@ pub(super) fn validate(
     }
     let gs = grain_scene(scene, spec, ctx.base_dir, ctx.path);
     warnings.extend(super::grains_check::validate(&gs.scene, ctx)?);
-    warnings.retain(|w| !w.contains("output_every_s"));
     if let SampleSpec::Pack { min_m, max_m, .. } = &spec.sample {
-        let hi = gs.scene.region.max_m;
+        let hi = gs.scene.domain.size();
         if min_m[0] < 0.0 || min_m[1] < 0.0 || max_m[0] > hi[0] || max_m[1] > hi[1] {
             return Err(ctx.err(
                 "min_m",
@@ -137,6 +133,20 @@ pub(super) fn validate(
             "substeps",
             0,
             "must be at least 1 DEM sub-step per fluid step",
+        ));
+    }
+    if let Some(n) = coupling
+        .substeps
+        .filter(|&n| n > super::limits::MAX_SUBSTEPS)
+    {
+        return Err(ctx.err(
+            "substeps",
+            0,
+            format!(
+                "{n} DEM sub-steps per fluid step is more than grainflow runs ({}); the fluid \
+                 step is too long for these contacts: refine the lattice or stiffen less",
+                super::limits::MAX_SUBSTEPS
+            ),
         ));
     }
     if let Some(r) = &coupling.repulsion {

@@ -12,29 +12,22 @@ pub struct GrainScene {
     /// Free text shown in reports.
     #[serde(default)]
     pub title: String,
-    /// The region the grains live in: it is split into slabs over the ranks and framed in
-    /// pictures. Grains may leave it (walls keep them in).
-    pub region: Region,
+    /// The region the grains live in, from the origin: it is split into slabs over the
+    /// ranks and framed in pictures. Grains may leave it (walls keep them in).
+    pub domain: super::output::GrainDomain,
     /// Grains, contacts and walls.
     pub grains: GrainsSpec,
-    /// Run length and output.
+    /// Run length.
     pub run: GrainRun,
+    /// Snapshots, pictures and checkpoints.
+    #[serde(default)]
+    pub output: super::output::Output,
     /// Derived quantities computed at the end.
     #[serde(default)]
     pub analyses: Vec<GrainAnalysis>,
     /// Pass/fail checks on derived quantities.
     #[serde(default)]
     pub checks: Vec<Check>,
-}
-
-/// An axis-aligned rectangle (m).
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct Region {
-    /// Lower-left corner (m).
-    pub min_m: [f64; 2],
-    /// Upper-right corner (m).
-    pub max_m: [f64; 2],
 }
 
 /// The grains and everything that acts on them.
@@ -95,7 +88,8 @@ pub struct ContactSpec {
 pub enum TimeStepSpec {
     /// Δt = λ Δt_cr of the lightest grain.
     Critical {
-        /// λ in (0, 1]; about 0.1.
+        /// λ in (0, 1]; 0.1 by default.
+        #[serde(default = "default_lambda")]
         lambda: f64,
     },
     /// A fixed step; an error when above λ Δt_cr.
@@ -232,33 +226,20 @@ pub struct WallSpec {
     pub remove_at_s: Option<f64>,
 }
 
-/// Run length and output of a grains scene.
+/// Run length of a grains scene.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct GrainRun {
+    /// Number of steps after the sample is ready (exclusive with `end_time_s`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u64>,
     /// Simulated time to reach after the sample is ready (s).
-    pub end_time_s: f64,
-    /// Snapshot (HDF5 points + PNG) every this much simulated time (s); 0 = only at the
-    /// start and the end.
-    #[serde(default)]
-    pub output_every_s: f64,
-    /// Write PNG pictures with each snapshot.
-    #[serde(default = "default_true")]
-    pub pictures: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_time_s: Option<f64>,
     /// Stop early once the mean kinetic energy per grain stays below this (J/m) after the
     /// last wall removal; 0 = never.
     #[serde(default)]
     pub stop_below_kinetic_energy_j_m: f64,
-    /// Write `checkpoint.h5` every this many steps; 0 = never.
-    #[serde(default)]
-    pub checkpoint_every: u64,
-    /// Write a checkpoint after the last step.
-    #[serde(default)]
-    pub checkpoint_at_end: bool,
-}
-
-fn default_true() -> bool {
-    true
 }
 
 /// A derived quantity of a grains run.

@@ -37,10 +37,12 @@ pub fn grain_result_names(s: &GrainScene) -> Vec<String> {
 
 /// Parse and validate a grains scene.
 pub fn parse_grains(text: &str, path: &Path) -> Result<ValidGrainScene, SceneError> {
+    super::screen_raw(text, path)?;
     let scene: GrainScene = toml::from_str(text).map_err(|e| SceneError::Parse {
         path: path.to_owned(),
         message: e.to_string().trim_end().to_string(),
     })?;
+    super::unknown::refuse_ignored(text, &scene, path)?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let ctx = Context {
         text,
@@ -64,6 +66,40 @@ pub(super) fn non_negative(ctx: &Context, key: &str, v: f64) -> Result<(), Scene
     }
 }
 
+/// The contact law of `c`.
+fn contact_model(c: &ContactSpec) -> ContactModel {
+    ContactModel {
+        kn: c.normal_stiffness_n_m2,
+        kt: c.tangential_stiffness_n_m2,
+        restitution: c.restitution,
+        friction: c.friction,
+        rolling_friction: c.rolling_friction,
+        tangential_damping: c.tangential_damping,
+    }
+}
+
+/// Grains a packed rectangle will hold: its area times the solid fraction over the mean of
+/// the smallest and largest disk's area (within a factor of 2 for these distributions).
+fn packed_grains(min_m: [f64; 2], max_m: [f64; 2], sizes: &SizeSpec, solid_fraction: f64) -> f64 {
+    let d = size_distribution(sizes);
+    let (r0, r1) = (d.min_radius(), d.max_radius());
+    let area = (max_m[0] - min_m[0]) * (max_m[1] - min_m[1]);
+    solid_fraction * area / (std::f64::consts::PI * 0.5 * (r0 * r0 + r1 * r1))
+}
+
+/// Every component of `v` finite and at most `max` in magnitude.
+pub(super) fn bounded(ctx: &Context, key: &str, v: &[f64], max: f64) -> Result<(), SceneError> {
+    if v.iter().all(|x| x.is_finite() && x.abs() <= max) {
+        Ok(())
+    } else {
+        Err(ctx.err(
+            key,
+            0,
+            format!("{v:?} is out of range: each component must lie within ±{max:e}"),
+        ))
+    }
+}
+
 pub(super) fn rectangle(
     ctx: &Context,
     key: &str,
@@ -82,11 +118,18 @@ pub(super) fn rectangle(
 }
 
 pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
-    let mut warnings = Vec::new();
-    rectangle(ctx, "min_m", s.region.min_m, s.region.max_m)?;
+    let warnings = Vec::new();
+    super::output::validate_grain_domain(&s.domain, ctx)?;
+    let size = s.domain.size();
     let g = &s.grains;
     positive(ctx, "density_kg_m3", g.density_kg_m3, "the grain density")?;
     non_negative(ctx, "global_damping_1_s", g.global_damping_1_s)?;
+    bounded(
+        ctx,
+        "gravity_m_s2",
+        &g.gravity_m_s2,
+        super::limits::MAX_GRAVITY_M_S2,
+    )?;
     let c = &g.contact;
     positive(ctx, "normal_stiffness_n_m2", c.normal_stiffness_n_m2, "k_n")?;
     non_negative(
@@ -124,8 +167,29 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
             }
         }
     }
-    if let TimeStepSpec::Fixed { time_step_s, .. } = g.time_step {
+    if let TimeStepSpec::Fixed {
+        time_step_s,
+        lambda,
+    } = g.time_step
+    {
         positive(ctx, "time_step_s", time_step_s, "the time step")?;
+        // What `run` refuses once the grains exist, refused here when the scene alone
+        // gives the lightest grain (seed eq. 5.59–5.60).
+        if let Some((r, _)) = super::coupling_check::radius_range(&g.sample) {
+            let m = g.density_kg_m3 * std::f64::consts::PI * r * r;
+            let limit = lambda * contact_model(c).critical_time_step(m);
+            if time_step_s > limit {
+                return Err(ctx.err(
+                    "time_step_s",
+                    0,
+                    format!(
+                        "the DEM time step {time_step_s:e} s exceeds λ·Δt_cr = {limit:e} s of the \
+                         smallest grain (λ = {lambda}); use a time step ≤ {limit:e} s, softer \
+                         contacts or kind = \"critical\""
+                    ),
+                ));
+            }
+        }
     }
     match &g.sample {
         SampleSpec::Pack {
@@ -148,6 +212,29 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
                     format!("must be in (0, 0.9] (random addition jams near 0.55), got {solid_fraction}"),
                 ));
             }
+            let inside = (0..2).all(|a| min_m[a] >= 0.0 && max_m[a] <= size[a]);
+            if !inside {
+                return Err(ctx.err(
+                    "max_m",
+                    0,
+                    format!(
+                        "the packing rectangle {min_m:?}–{max_m:?} m reaches outside the domain \
+                         [0, 0]–{size:?} m; move it inside or enlarge [domain]"
+                    ),
+                ));
+            }
+            let grains = packed_grains(*min_m, *max_m, sizes, *solid_fraction);
+            if !(grains <= super::limits::MAX_GRAINS) {
+                return Err(ctx.err(
+                    "sizes",
+                    0,
+                    format!(
+                        "this rectangle holds about {grains:.3e} grains of these radii, more \
+                         than grainflow packs ({:.0e}); use larger grains or a smaller rectangle",
+                        super::limits::MAX_GRAINS
+                    ),
+                ));
+            }
             if let Some(st) = settle {
                 positive(ctx, "damping_1_s", st.damping_1_s, "the settling damping")?;
                 positive(
@@ -156,8 +243,25 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
                     st.kinetic_energy_per_grain_j_m,
                     "the settling threshold",
                 )?;
-                if st.max_steps == 0 {
-                    return Err(ctx.err("max_steps", 0, "must be at least 1"));
+                if st.max_steps == 0 || st.max_steps > 1_000_000_000 {
+                    return Err(ctx.err(
+                        "max_steps",
+                        0,
+                        format!("must be 1 to 10⁹ steps, got {}", st.max_steps),
+                    ));
+                }
+                if let Some(h) = st.trim_above_m {
+                    if h <= min_m[1] + dist.min_radius() {
+                        return Err(ctx.err(
+                            "trim_above_m",
+                            0,
+                            format!(
+                                "trimming above {h} m keeps no grain of a sample packed from \
+                                 y = {} m; set it above the settled layer's bottom",
+                                min_m[1]
+                            ),
+                        ));
+                    }
                 }
                 if let Some(f) = st.friction {
                     if !(f >= 0.0 && f.is_finite()) {
@@ -176,9 +280,14 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
             }
             for (n, l) in grains.iter().enumerate() {
                 positive(ctx, "radius_m", l.radius_m, "a grain radius")?;
+                bounded(
+                    ctx,
+                    "velocity_m_s",
+                    &l.velocity_m_s,
+                    super::limits::MAX_SPEED_M_S,
+                )?;
                 let inside = |a: usize| {
-                    l.position_m[a] - l.radius_m >= s.region.min_m[a]
-                        && l.position_m[a] + l.radius_m <= s.region.max_m[a]
+                    l.position_m[a] - l.radius_m >= 0.0 && l.position_m[a] + l.radius_m <= size[a]
                 };
                 let finite = l
                     .position_m
@@ -191,8 +300,8 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
                         n,
                         format!(
                             "grain {n} at {:?} with radius {} m is not wholly inside the domain \
-                             [{:?}, {:?}]; move it inside",
-                            l.position_m, l.radius_m, s.region.min_m, s.region.max_m
+                             [0, 0]–{size:?} m; move it inside",
+                            l.position_m, l.radius_m
                         ),
                     ));
                 }
@@ -219,13 +328,19 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
         if w.from_m == w.to_m || !w.from_m.iter().chain(&w.to_m).all(|v| v.is_finite()) {
             return Err(ctx.err("from_m", n, format!("wall `{}` has no length", w.name)));
         }
+        bounded(
+            ctx,
+            "velocity_m_s",
+            &w.velocity_m_s,
+            super::limits::MAX_SPEED_M_S,
+        )?;
         non_negative(ctx, "friction", w.friction)?;
         if let Some(t) = w.remove_at_s {
             non_negative(ctx, "remove_at_s", t)?;
         }
     }
-    positive(ctx, "end_time_s", s.run.end_time_s, "the run's end time")?;
-    non_negative(ctx, "output_every_s", s.run.output_every_s)?;
+    super::output::validate_length(s.run.steps, s.run.end_time_s, ctx)?;
+    super::output::validate_output(&s.output, super::output::SceneKind::Grains, ctx)?;
     non_negative(
         ctx,
         "stop_below_kinetic_energy_j_m",
@@ -265,9 +380,6 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
             ));
         }
     }
-    if s.run.output_every_s == 0.0 {
-        warnings.push("output_every_s = 0: snapshots only at the start and the end".into());
-    }
     Ok(warnings)
 }
 
@@ -306,23 +418,55 @@ pub fn size_distribution(s: &SizeSpec) -> SizeDistribution {
 }
 
 impl ValidGrainScene {
+    /// An error about `key` of this scene that only shows once the scene is being built
+    /// (no line: the key may stand for a sample file).
+    pub fn invalid(&self, key: &str, message: String) -> SceneError {
+        SceneError::Invalid {
+            path: self.path.clone(),
+            line: None,
+            key: key.into(),
+            message,
+        }
+    }
+
     /// The contact law of the scene.
     pub fn contact_model(&self) -> ContactModel {
-        let c = &self.scene.grains.contact;
-        ContactModel {
-            kn: c.normal_stiffness_n_m2,
-            kt: c.tangential_stiffness_n_m2,
-            restitution: c.restitution,
-            friction: c.friction,
-            rolling_friction: c.rolling_friction,
-            tangential_damping: c.tangential_damping,
-        }
+        contact_model(&self.scene.grains.contact)
     }
 
     /// λ of the time-step choice: the fraction of Δt_cr the step must respect.
     pub fn lambda(&self) -> f64 {
         match self.scene.grains.time_step {
             TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => lambda,
+        }
+    }
+
+    /// The time step (s) a run of this scene takes, when the scene alone decides it: the
+    /// fixed one, or λ Δt_cr of its smallest packed or listed grain (the lightest; a CSV
+    /// sample's grains decide theirs: `None`).
+    pub fn planned_time_step(&self) -> Option<f64> {
+        if let TimeStepSpec::Fixed { time_step_s, .. } = self.scene.grains.time_step {
+            return Some(time_step_s);
+        }
+        let (r, _) = super::coupling_check::radius_range(&self.scene.grains.sample)?;
+        let m = self.scene.grains.density_kg_m3 * std::f64::consts::PI * r * r;
+        Some(self.lambda() * self.contact_model().critical_time_step(m))
+    }
+
+    /// About how many grains the sample holds: listed ones, or a packed rectangle's share
+    /// (area × solid fraction over the mean of the extreme disks' areas); `None` for a CSV
+    /// file.
+    pub fn estimated_grains(&self) -> Option<f64> {
+        match &self.scene.grains.sample {
+            SampleSpec::List { grains } => Some(grains.len() as f64),
+            SampleSpec::Pack {
+                min_m,
+                max_m,
+                sizes,
+                solid_fraction,
+                ..
+            } => Some(packed_grains(*min_m, *max_m, sizes, *solid_fraction)),
+            SampleSpec::Csv { .. } => None,
         }
     }
 

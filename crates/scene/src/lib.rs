@@ -10,11 +10,15 @@ pub mod coupling;
 pub mod coupling_check;
 mod grains;
 mod grains_check;
+mod legacy;
+pub mod limits;
 mod mpm;
 mod mpm_check;
 mod mpm_material_check;
+mod output;
 mod probes_check;
 mod schema;
+mod unknown;
 mod validate;
 
 pub use build::{build_lattice, solid_id_of, BuiltGeometry};
@@ -24,6 +28,7 @@ pub use lbm::gpu::GpuStorage;
 pub use lbm::units::{derive, TimeStepChoice, Units};
 pub use mpm::*;
 pub use mpm_check::{body_shape, mpm_result_names, parse_mpm, ValidMpmScene};
+pub use output::{Cadence, GrainDomain, Output, SceneKind};
 pub use schema::*;
 
 use std::path::{Path, PathBuf};
@@ -123,6 +128,7 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
         path: path.to_owned(),
         message: e.to_string().trim_end().to_string(),
     })?;
+    legacy::check(&table, &text, path)?;
     if table.contains_key("mpm") {
         if let Some(other) = ["fluid", "grains"]
             .into_iter()
@@ -160,10 +166,12 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
 
 /// Parse and validate scene text; `path` is used in messages and to resolve relative files.
 pub fn parse(text: &str, path: &Path) -> Result<ValidScene, SceneError> {
+    screen_raw(text, path)?;
     let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
         path: path.to_owned(),
         message: e.to_string().trim_end().to_string(),
     })?;
+    unknown::refuse_ignored(text, &scene, path)?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let ctx = context::Context {
         text,
@@ -178,4 +186,17 @@ pub fn parse(text: &str, path: &Path) -> Result<ValidScene, SceneError> {
         base_dir,
         path: path.to_owned(),
     })
+}
+
+/// Checks on the file as plain TOML, before the strict parse: a key of an older scene
+/// dialect (an error naming its replacement) and a NaN or infinite number (an error naming
+/// its key path). Nothing when the text is not TOML: the strict parse reports that.
+pub(crate) fn screen_raw(text: &str, path: &Path) -> Result<(), SceneError> {
+    match toml::from_str::<toml::Table>(text) {
+        Ok(table) => {
+            legacy::check(&table, text, path)?;
+            limits::refuse_non_finite(text, path)
+        }
+        Err(_) => Ok(()),
+    }
 }

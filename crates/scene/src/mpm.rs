@@ -3,7 +3,7 @@
 
 use super::grains::GrainAnalysis;
 use super::schema::Check;
-use mpm::{Boundaries, Scheme, ShapeKind, SideWalls};
+use mpm::{Boundaries, Scheme, ShapeKind, Side, SideWalls};
 use serde::{Deserialize, Serialize};
 
 /// An MPM scene.
@@ -13,10 +13,17 @@ pub struct MpmScene {
     /// Free text shown in reports.
     #[serde(default)]
     pub title: String,
-    /// Grid, materials, bodies and boundaries.
+    /// The background grid: `cells` × `spacing_m` from the origin.
+    pub domain: super::schema::Domain,
+    /// Conditions on the four sides of the domain.
+    pub boundaries: MpmBoundaries,
+    /// Materials, bodies and the update scheme.
     pub mpm: MpmSpec,
-    /// Run length and output.
+    /// Run length.
     pub run: MpmRun,
+    /// Snapshots, pictures and checkpoints.
+    #[serde(default)]
+    pub output: super::output::Output,
     /// Derived quantities computed at the end (`column-collapse`).
     #[serde(default)]
     pub analyses: Vec<GrainAnalysis>,
@@ -29,10 +36,6 @@ pub struct MpmScene {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MpmSpec {
-    /// Domain width and height (m); its lower-left corner is the origin.
-    pub domain_m: [f64; 2],
-    /// Background cell size h (m); the domain must hold a whole number of cells.
-    pub cell_size_m: f64,
     /// `linear`, `gimp` (uGIMP) or `cp-gimp`.
     pub shape_functions: ShapeKind,
     /// `usf`, `usl` or `musl`.
@@ -59,8 +62,6 @@ pub struct MpmSpec {
     /// Time step: a Courant number of the CFL limit, or a fixed step checked against it.
     #[serde(default)]
     pub time_step: MpmTimeStep,
-    /// Conditions on the four sides of the domain.
-    pub boundaries: Boundaries,
     /// Side walls of a quasi-two-dimensional channel, `{ gap_m, friction }`: Coulomb
     /// friction μ_w |σ_zz| on both faces of the simulated plane, W = `gap_m` apart. Absent
     /// (default): plane strain without walls.
@@ -267,33 +268,46 @@ pub enum PictureField {
     PlasticStrain,
 }
 
-/// Run length and output of an MPM scene.
+/// Run length of an MPM scene.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MpmRun {
+    /// Number of steps (exclusive with `end_time_s`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u64>,
     /// Simulated time (s).
-    pub end_time_s: f64,
-    /// Snapshot (HDF5 + PNG) every this much simulated time (s); 0 = start and end only.
-    #[serde(default)]
-    pub output_every_s: f64,
-    /// Write PNG pictures with each snapshot.
-    #[serde(default = "default_true")]
-    pub pictures: bool,
-    /// What the pictures colour the points by.
-    #[serde(default)]
-    pub picture_field: PictureField,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_time_s: Option<f64>,
     /// Stop early once the kinetic energy per unit mass stays below this (J/kg) after
-    /// 10 % of the end time; 0 = never.
+    /// 10 % of the run; 0 = never.
     #[serde(default)]
     pub stop_below_specific_kinetic_energy_j_kg: f64,
-    /// Write `checkpoint.h5` every this many steps; 0 = never.
-    #[serde(default)]
-    pub checkpoint_every: u64,
-    /// Write a checkpoint after the last step.
-    #[serde(default)]
-    pub checkpoint_at_end: bool,
 }
 
-fn default_true() -> bool {
-    true
+/// The four sides of an MPM domain, named as in a fluid scene: `west` (x = 0), `east`
+/// (x = width), `south` (y = 0), `north` (y = height). Each is `{ kind = "open" }`,
+/// `"fixed"`, `"roller"` or `{ kind = "frictional", friction = μ }`.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MpmBoundaries {
+    /// x = 0.
+    pub west: Side,
+    /// x = width.
+    pub east: Side,
+    /// y = 0.
+    pub south: Side,
+    /// y = height.
+    pub north: Side,
+}
+
+impl MpmBoundaries {
+    /// The solver's sides.
+    pub fn sides(&self) -> Boundaries {
+        Boundaries {
+            left: self.west,
+            right: self.east,
+            bottom: self.south,
+            top: self.north,
+        }
+    }
 }

@@ -46,12 +46,24 @@ pub fn mpm_result_names(s: &MpmScene) -> Vec<String> {
     names
 }
 
+impl ValidMpmScene {
+    /// The simulated time the scene runs (s): its `end_time_s`, or its `steps` times the
+    /// time step.
+    pub fn end_time_s(&self) -> f64 {
+        let r = &self.scene.run;
+        r.end_time_s
+            .unwrap_or(r.steps.unwrap_or(0) as f64 * self.setup.dt)
+    }
+}
+
 /// Parse and validate an MPM scene.
 pub fn parse_mpm(text: &str, path: &Path) -> Result<ValidMpmScene, SceneError> {
+    super::screen_raw(text, path)?;
     let scene: MpmScene = toml::from_str(text).map_err(|e| SceneError::Parse {
         path: path.to_owned(),
         message: e.to_string().trim_end().to_string(),
     })?;
+    super::unknown::refuse_ignored(text, &scene, path)?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let ctx = Context {
         text,
@@ -71,24 +83,23 @@ pub fn parse_mpm(text: &str, path: &Path) -> Result<ValidMpmScene, SceneError> {
 }
 
 fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>), SceneError> {
-    let mut warnings = Vec::new();
+    let warnings = Vec::new();
     let m = &s.mpm;
-    positive(ctx, "cell_size_m", m.cell_size_m, "the cell size")?;
-    rectangle(ctx, "domain_m", [0.0, 0.0], m.domain_m)?;
-    let h = m.cell_size_m;
-    let mut cells = [0usize; 2];
-    for d in 0..2 {
-        let n = m.domain_m[d] / h;
-        if (n - n.round()).abs() > 1e-6 * n.max(1.0) || n.round() < 2.0 {
-            return Err(ctx.err("domain_m", 0, format!(
-                "the domain {:?} m must hold a whole number (≥ 2) of {h} m cells along each axis; {} has {n:.4}",
-                m.domain_m, ["x", "y"][d])));
-        }
-        cells[d] = n.round() as usize;
-    }
-    if cells[0] * cells[1] > 400_000_000 {
+    let d = &s.domain;
+    positive(ctx, "spacing_m", d.spacing_m, "the cell size")?;
+    let h = d.spacing_m;
+    let cells = d.cells;
+    if cells.iter().any(|&n| n < 2) {
         return Err(ctx.err(
-            "cell_size_m",
+            "cells",
+            0,
+            format!("the grid needs at least 2 cells along each axis, got {cells:?}"),
+        ));
+    }
+    let size = [cells[0] as f64 * h, cells[1] as f64 * h];
+    if cells[0].saturating_mul(cells[1]) > 400_000_000 {
+        return Err(ctx.err(
+            "cells",
             0,
             format!(
                 "{} × {} cells is more than this build supports (4e8); use larger cells",
@@ -148,15 +159,18 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             ));
         }
     }
-    if !m.gravity_m_s2.iter().all(|g| g.is_finite()) {
-        return Err(ctx.err("gravity_m_s2", 0, "must be finite"));
-    }
-    let b = &m.boundaries;
+    super::grains_check::bounded(
+        ctx,
+        "gravity_m_s2",
+        &m.gravity_m_s2,
+        super::limits::MAX_GRAVITY_M_S2,
+    )?;
+    let b = &s.boundaries;
     for (name, side) in [
-        ("left", b.left),
-        ("right", b.right),
-        ("bottom", b.bottom),
-        ("top", b.top),
+        ("west", b.west),
+        ("east", b.east),
+        ("south", b.south),
+        ("north", b.north),
     ] {
         if let Side::Frictional { friction } = side {
             if !(friction.is_finite() && friction >= 0.0) {
@@ -232,13 +246,19 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
                 ),
             ));
         }
+        super::grains_check::bounded(
+            ctx,
+            "velocity_m_s",
+            &body.velocity_m_s,
+            super::limits::MAX_SPEED_M_S,
+        )?;
         let shape = body_shape(&body.shape);
         let (lo, hi) = shape.bounds();
         let inside = lo.iter().chain(&hi).all(|v| v.is_finite())
             && lo[0] >= 0.0
             && lo[1] >= 0.0
-            && hi[0] <= m.domain_m[0]
-            && hi[1] <= m.domain_m[1];
+            && hi[0] <= size[0]
+            && hi[1] <= size[1];
         let key = match body.shape {
             ShapeSpec::Rectangle { .. } => "min_m",
             ShapeSpec::Polygon { .. } => "vertices_m",
@@ -247,10 +267,7 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             return Err(ctx.err(
                 key,
                 n,
-                format!(
-                    "body {n} ({lo:?}–{hi:?} m) must lie inside the domain [0, 0]–{:?} m",
-                    m.domain_m
-                ),
+                format!("body {n} ({lo:?}–{hi:?} m) must lie inside the domain [0, 0]–{size:?} m"),
             ));
         }
         match &body.shape {
@@ -267,8 +284,8 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             }
         }
     }
-    positive(ctx, "end_time_s", s.run.end_time_s, "the run's end time")?;
-    non_negative(ctx, "output_every_s", s.run.output_every_s)?;
+    super::output::validate_length(s.run.steps, s.run.end_time_s, ctx)?;
+    super::output::validate_output(&s.output, super::output::SceneKind::Mpm, ctx)?;
     non_negative(
         ctx,
         "stop_below_specific_kinetic_energy_j_kg",
@@ -309,9 +326,6 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             ));
         }
     }
-    if s.run.output_every_s == 0.0 {
-        warnings.push("output_every_s = 0: snapshots only at the start and the end".into());
-    }
     let setup = MpmSetup {
         spec: GridSpec {
             nx: cells[0],
@@ -320,7 +334,7 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
         },
         shape: m.shape_functions,
         scheme: m.update,
-        boundaries: m.boundaries,
+        boundaries: s.boundaries.sides(),
         gravity: m.gravity_m_s2,
         dt,
         damping: m.local_damping,
@@ -355,6 +369,28 @@ fn build_points(scene: &MpmScene, setup: &MpmSetup, ctx: &Context) -> Result<Poi
     let mut points = Points::default();
     let mut next_id = 0u64;
     let shapes: Vec<Shape> = m.bodies.iter().map(|b| body_shape(&b.shape)).collect();
+    // At most the bodies' bounding boxes' cells times n² points each, before any is made.
+    let h = setup.spec.h;
+    let most: f64 = shapes
+        .iter()
+        .zip(&m.bodies)
+        .map(|(s, b)| {
+            let (lo, hi) = s.bounds();
+            let n = b.points_per_cell as f64;
+            ((hi[0] - lo[0]) / h + 1.0) * ((hi[1] - lo[1]) / h + 1.0) * n * n
+        })
+        .sum();
+    if !(most <= super::limits::MAX_POINTS) {
+        return Err(ctx.err(
+            "points_per_cell",
+            0,
+            format!(
+                "the bodies would hold up to {most:.3e} material points, more than grainflow \
+                 fills ({:.0e}); use larger cells or fewer points per cell",
+                super::limits::MAX_POINTS
+            ),
+        ));
+    }
     for (n, body) in m.bodies.iter().enumerate() {
         let mat = m
             .materials

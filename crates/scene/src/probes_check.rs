@@ -114,6 +114,7 @@ pub(super) fn validate_probes_and_analyses(
                     *average_last_s,
                     "the averaging window",
                 )?;
+                within_run(ctx, *average_last_s, run_end_s)?;
             }
             Analysis::DraftKissTumble {
                 lower,
@@ -139,6 +140,7 @@ pub(super) fn validate_probes_and_analyses(
                     *average_last_s,
                     "the averaging window",
                 )?;
+                within_run(ctx, *average_last_s, run_end_s)?;
                 fall_window(run_end_s, ctx, *fall_window_s, *terminal_velocity_m_s)?;
             }
             Analysis::ColumnCollapse {
@@ -199,6 +201,21 @@ pub(super) fn validate_probes_and_analyses(
         }
     }
     validate_checks(&s.checks, ctx)
+}
+
+/// An averaging window of `window_s` (s) fits in a run of `run_end_s` (s).
+fn within_run(ctx: &Context, window_s: f64, run_end_s: f64) -> Result<(), SceneError> {
+    if window_s > run_end_s {
+        return Err(ctx.err(
+            "average_last_s",
+            0,
+            format!(
+                "the averaging window ({window_s} s) is longer than the run ({run_end_s} s); \
+                 shorten it or lengthen the run"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The draft-kiss-tumble fall-speed window: 0 ≤ from < to ≤ the run's end (`run_end_s`);

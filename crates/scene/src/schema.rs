@@ -21,8 +21,11 @@ pub struct Scene {
     /// Solid obstacles (half-way bounce-back).
     #[serde(default)]
     pub obstacles: Vec<Obstacle>,
-    /// Run length and output.
+    /// Run length, precision and backend.
     pub run: Run,
+    /// Snapshots, pictures, probes' cadence and checkpoints.
+    #[serde(default)]
+    pub output: super::output::Output,
     /// Time series recorded during the run.
     #[serde(default)]
     pub probes: Vec<Probe>,
@@ -258,7 +261,7 @@ impl Obstacle {
     }
 }
 
-/// Run length, precision and output.
+/// Run length, precision and backend.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Run {
@@ -284,40 +287,6 @@ pub struct Run {
     /// `--kernel` overrides.
     #[serde(default)]
     pub kernel: Kernel,
-    /// Snapshot (HDF5 + PNG) every this many steps; 0 = only at the end.
-    #[serde(default)]
-    pub output_every: u64,
-    /// Fields in snapshots: any of "density", "velocity", "vorticity".
-    #[serde(default = "default_fields")]
-    pub fields: Vec<FieldName>,
-    /// Write PNG pictures with each snapshot.
-    #[serde(default = "default_true")]
-    pub pictures: bool,
-    /// Record probes every this many steps.
-    #[serde(default = "default_one")]
-    pub probe_every: u64,
-    /// Deflate level of snapshot datasets, 0 (off, the default: LBM doubles compress by
-    /// only ~10 % and deflate cuts write bandwidth ~6×) to 9.
-    #[serde(default)]
-    pub compression: u8,
-    /// Write `checkpoint.h5` every this many steps; 0 = never (it is still written on
-    /// SIGTERM/SIGUSR1 and at the end when `checkpoint_at_end`).
-    #[serde(default)]
-    pub checkpoint_every: u64,
-    /// Also write a checkpoint every this many minutes of wall-clock time; 0 = never.
-    #[serde(default)]
-    pub checkpoint_minutes: f64,
-    /// Write a checkpoint after the last step.
-    #[serde(default)]
-    pub checkpoint_at_end: bool,
-}
-
-fn default_fields() -> Vec<FieldName> {
-    vec![
-        FieldName::Density,
-        FieldName::Velocity,
-        FieldName::Vorticity,
-    ]
 }
 
 /// Floating-point precision of a run.
@@ -388,12 +357,6 @@ pub enum Signal {
     Pressure,
     /// Transverse velocity: on the wake axis it oscillates only when vortices shed.
     Uy,
-}
-fn default_true() -> bool {
-    true
-}
-fn default_one() -> u64 {
-    1
 }
 
 /// A time series recorded during the run.

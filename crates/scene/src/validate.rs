@@ -17,6 +17,17 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
             format!("the lattice needs at least 2 × 2 cells, got {nx} × {ny}"),
         ));
     }
+    if super::limits::cell_count([nx.saturating_add(2), ny.saturating_add(2)]).is_none() {
+        return Err(ctx.err(
+            "cells",
+            0,
+            format!(
+                "{nx} × {ny} cells is more than any machine holds (at most {} cells); use a \
+                 coarser spacing_m",
+                super::limits::MAX_CELLS
+            ),
+        ));
+    }
     positive(ctx, "spacing_m", s.domain.spacing_m, "the lattice spacing")?;
     let f = &s.fluid;
     positive(ctx, "density_kg_m3", f.density_kg_m3, "the density")?;
@@ -95,6 +106,32 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
             ),
         ));
     }
+    let initial = match f.initial {
+        Initial::Rest => None,
+        Initial::Uniform { velocity_m_s } => {
+            Some(("velocity_m_s", velocity_m_s[0].hypot(velocity_m_s[1])))
+        }
+        Initial::TaylorGreen { amplitude_m_s } => Some(("amplitude_m_s", amplitude_m_s.abs())),
+    };
+    if let Some((key, speed)) = initial {
+        // Ma = |u_lb| √3, with u_lb = u Δt/Δx.
+        let ma = units.velocity_to_lattice(speed) * 3f64.sqrt();
+        if ma >= 1.0 || (ma >= 0.3 && !f.allow_high_mach) {
+            return Err(ctx.err(
+                key,
+                0,
+                format!(
+                    "the initial speed {speed} m/s is Mach {ma:.3} on this lattice (≥ {}): the \
+                     run cannot stay stable; lower it, or shorten the time step",
+                    if ma >= 1.0 {
+                        "1"
+                    } else {
+                        "0.3; allow_high_mach lifts this"
+                    }
+                ),
+            ));
+        }
+    }
     if units.mach > 0.1 {
         warnings.push(format!(
             "Mach number {:.3} > 0.1: expect compressibility errors of order Ma² = {:.1e}",
@@ -103,10 +140,12 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
         ));
     }
     if units.tau < 0.51 {
-        warnings.push(format!(
-            "τ = {:.4} is close to ½: BGK may go unstable; consider TRT or MRT",
-            units.tau
-        ));
+        let advice = match f.collision {
+            CollisionModel::Bgk => "BGK may go unstable; consider TRT or MRT",
+            CollisionModel::Trt { .. } => "TRT may go unstable; consider MRT or a longer τ",
+            CollisionModel::Mrt { .. } => "MRT may go unstable; consider a longer τ",
+        };
+        warnings.push(format!("τ = {:.4} is close to ½: {advice}", units.tau));
     }
     match &f.collision {
         CollisionModel::Bgk => {}
@@ -317,22 +356,5 @@ fn validate_run(s: &Scene, ctx: &Context, units: &Units) -> Result<(), SceneErro
         }
         _ => return Err(ctx.err("run", 0, "set exactly one of steps or end_time_s in [run]")),
     }
-    if r.probe_every == 0 {
-        return Err(ctx.err("probe_every", 0, "probe_every must be at least 1"));
-    }
-    if r.compression > 9 {
-        return Err(ctx.err(
-            "compression",
-            0,
-            "compression is a deflate level from 0 (off) to 9; use 1 for a good speed/size balance",
-        ));
-    }
-    if !(r.checkpoint_minutes >= 0.0 && r.checkpoint_minutes.is_finite()) {
-        return Err(ctx.err(
-            "checkpoint_minutes",
-            0,
-            "checkpoint_minutes must be a finite number ≥ 0 (0 turns wall-clock checkpoints off)",
-        ));
-    }
-    Ok(())
+    super::output::validate_output(&s.output, super::output::SceneKind::Fluid, ctx)
 }

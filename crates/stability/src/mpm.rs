@@ -16,7 +16,7 @@ pub fn point(scene: &ValidMpmScene, courant: f64) -> (f64, f64, bool) {
     };
     let g = scene.scene.mpm.gravity_m_s2[0].hypot(scene.scene.mpm.gravity_m_s2[1]);
     let bound = 10.0 * (2.0 * g * scene.setup.spec.height()).sqrt();
-    let steps = (scene.scene.run.end_time_s / sys.setup.dt).ceil() as usize;
+    let steps = (scene.end_time_s() / sys.setup.dt).ceil() as usize;
     let mut fastest = 0.0f64;
     for step in 0..steps {
         if sys.step(&comm).is_err() {
