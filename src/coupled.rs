@@ -71,6 +71,7 @@ pub fn lbm_dem<T: Real>(
         allow_overlap: spec.allow_overlap || settled,
         global_damping_1_s: spec.global_damping_1_s,
         average_forces: c.force_averaging.unwrap_or(c.scheme == Scheme::BounceBack),
+        hydrodynamic_radius_ratio: c.hydrodynamic_radius_ratio(),
         repulsion: c.repulsion.as_ref().map(|r| (r.range_m, r.strength)),
         removals: spec
             .walls

@@ -60,7 +60,11 @@ pub fn plan(scene: &ValidScene) -> Result<Option<CouplingPlan>, RunError> {
         dem_lambda: scene.units.dt_s / substeps as f64 / dt_cr,
         scheme: c.scheme,
         grains: count,
-        cells_per_diameter: (2.0 * rmin / scene.units.dx_m, 2.0 * rmax / scene.units.dx_m),
+        cells_per_diameter: {
+            // The fluid sees the hydrodynamic radius.
+            let k = c.hydrodynamic_radius_ratio() * 2.0 / scene.units.dx_m;
+            (k * rmin, k * rmax)
+        },
         dem_time_step_s: dt_d,
         substeps,
         force_averaging: c.force_averaging.unwrap_or(c.scheme == Scheme::BounceBack),

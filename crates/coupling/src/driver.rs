@@ -99,6 +99,8 @@ pub struct LbmDem {
     reduced_gravity: f64,
     /// Walls to remove at a time (index, time s).
     removals: Vec<(usize, f64)>,
+    /// r_h / r: the radius the fluid sees over the contact radius.
+    hydro_ratio: f64,
     /// Fluid steps taken (for messages).
     step: u64,
     /// Scratch for partial sums.
@@ -133,6 +135,8 @@ pub struct LbmDemSetup {
     pub average_forces: bool,
     /// Short-range repulsion (range m, strength in submerged weights), if on.
     pub repulsion: Option<(f64, f64)>,
+    /// r_h / r in (0, 1]: the radius the fluid sees, as a fraction of the contact radius.
+    pub hydrodynamic_radius_ratio: f64,
     /// Walls to remove at a time (index among the scene's walls, time s).
     pub removals: Vec<(usize, f64)>,
 }
@@ -237,6 +241,7 @@ impl LbmDem {
             average_forces,
             repulsion,
             removals,
+            hydrodynamic_radius_ratio,
         } = setup;
         let along_faces = fluid_walls(faces, domain, face_wall_friction, &dem_setup.walls);
         dem_setup.walls.extend(along_faces);
@@ -285,6 +290,7 @@ impl LbmDem {
             repulsion,
             reduced_gravity: gravity[0].hypot(gravity[1]),
             removals,
+            hydro_ratio: hydrodynamic_radius_ratio,
             step: lat.steps_done(),
             partials: Vec::new(),
         };
@@ -397,7 +403,7 @@ impl LbmDem {
         for (v, (s, src)) in all.iter().enumerate() {
             self.views.push(GrainView {
                 centre: [s.x[0] / dx, s.x[1] / dx],
-                radius: s.r / dx,
+                radius: s.r / dx * self.hydro_ratio,
                 velocity: [s.v[0] * dt / dx, s.v[1] * dt / dx],
                 omega: s.omega * dt,
             });

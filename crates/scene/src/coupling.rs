@@ -26,6 +26,18 @@ pub struct CouplingSpec {
     /// when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repulsion: Option<RepulsionSpec>,
+    /// r_h / r in (0, 1]: the fluid sees each grain with radius r_h = ratio × r while the
+    /// contacts use r, so touching disks leave pore throats the fluid can drain through (in
+    /// 2-D, disks in contact seal the packing). 1 (the grains as they are) by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hydrodynamic_radius_ratio: Option<f64>,
+}
+
+impl CouplingSpec {
+    /// r_h / r (1 unless the scene sets it).
+    pub fn hydrodynamic_radius_ratio(&self) -> f64 {
+        self.hydrodynamic_radius_ratio.unwrap_or(1.0)
+    }
 }
 
 /// Glowinski et al. (2001) short-range repulsion: F = s · W · ((r_i + r_j + ζ − d)/ζ)² along

@@ -109,8 +109,18 @@ pub(super) fn validate(
             ));
         }
     }
+    if let Some(k) = coupling.hydrodynamic_radius_ratio {
+        if !(k > 0.0 && k <= 1.0) {
+            return Err(ctx.err(
+                "hydrodynamic_radius_ratio",
+                0,
+                format!("r_h / r must lie in (0, 1], got {k}"),
+            ));
+        }
+    }
     if let Some((rmin, _)) = radius_range(&spec.sample) {
-        let cells = 2.0 * rmin / units.dx_m;
+        // The fluid sees the hydrodynamic radius.
+        let cells = 2.0 * rmin * coupling.hydrodynamic_radius_ratio() / units.dx_m;
         if cells < MIN_CELLS_PER_DIAMETER {
             return Err(ctx.err(
                 "sample",

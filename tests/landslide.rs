@@ -1,0 +1,91 @@
+//! Submarine landslides (jobs/submarine-landslide): the CI-sized scenes run, the mass fails
+//! down the submerged slope and comes to rest, and the hydrodynamic radius shrinks the disks
+//! the fluid sees without touching the contacts.
+
+mod common;
+
+use common::{grainflow, summary};
+
+/// `jobs/submarine-landslide/NAME.toml` as written by its generator.
+fn scene(name: &str) -> String {
+    format!("jobs/submarine-landslide/{name}.toml")
+}
+
+fn result(s: &serde_json::Value, name: &str) -> f64 {
+    s["results"][name]
+        .as_f64()
+        .unwrap_or_else(|| panic!("no result {name}: {}", s["results"]))
+}
+
+#[test]
+fn the_small_landslide_and_its_dry_twin_fail_downslope_and_stop() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut runout = Vec::new();
+    for name in ["sub-small-loose", "dry-small-loose"] {
+        let out = dir.path().join(name);
+        let o = grainflow(1, &["run", &scene(name), "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{name} failed");
+        let s = summary(&out);
+        assert_eq!(s["status"], "ok", "{name}");
+        // The mass left the gate by more than half its length, and its front lies inside
+        // the domain.
+        let r = result(&s, "collapse.runout");
+        assert!(r > 0.5 && r < 3.0, "{name}: run-out {r}");
+        // It came to rest: the collapse's stop time is a finite number of t_c.
+        let stop = result(&s, "collapse.stop_time");
+        assert!(stop.is_finite() && stop > 1.0, "{name}: stop time {stop}");
+        runout.push(r);
+    }
+    // The water slows the slide: a loose submerged mass of these grains runs out less far
+    // than its dry twin (viscous drag and pore-pressure feedback).
+    assert!(
+        runout[0] < runout[1],
+        "submerged {} against dry {}",
+        runout[0],
+        runout[1]
+    );
+}
+
+#[test]
+fn a_smaller_hydrodynamic_radius_lowers_the_drag_and_not_the_contacts() {
+    let text = std::fs::read_to_string(common::root().join("templates/coupled.toml")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut speed = Vec::new();
+    for (name, ratio) in [("full", None), ("one", Some(1.0)), ("small", Some(0.6))] {
+        let t = match ratio {
+            None => text.clone(),
+            Some(k) => text.replacen(
+                "[coupling]\n",
+                &format!("[coupling]\nhydrodynamic_radius_ratio = {k}\n"),
+                1,
+            ),
+        };
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&path, t).unwrap();
+        let out = dir.path().join(name);
+        let o = grainflow(
+            1,
+            &[
+                "run",
+                path.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--steps",
+                "600",
+            ],
+        );
+        assert!(o.status.code().is_some_and(|c| c == 0 || c == 2), "{name}");
+        let s = summary(&out);
+        let vy = s["probes"]["disk"]["vy_m_s"].as_f64().expect("disk probe");
+        speed.push(vy.abs());
+    }
+    // Ratio 1 is the grains as they are, to the bit.
+    assert_eq!(speed[0], speed[1]);
+    // A disk the fluid sees smaller meets less drag: it falls faster after the same time.
+    assert!(
+        speed[2] > 1.05 * speed[0],
+        "r_h = 0.6 r: {} against {}",
+        speed[2],
+        speed[0]
+    );
+}
