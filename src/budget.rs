@@ -78,12 +78,21 @@ const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 /// Bytes of a fluid lattice of `cells` (with the one-cell halo) in `buffers` distribution
 /// buffers of `bytes`-byte reals: the populations, the cell types, the fields a snapshot
 /// computes (density, velocity, vorticity in f64) and, coupled, the coupling's per-cell
-/// maps (covering grain, remap, marks).
+/// state ([`COUPLING_BYTES_PER_CELL`]).
 pub fn fluid_bytes(cells: [usize; 2], buffers: f64, bytes: f64, coupled: bool) -> f64 {
     let n = (cells[0] as f64 + 2.0) * (cells[1] as f64 + 2.0);
-    let per_cell = buffers * 9.0 * bytes + 2.0 + 4.0 * 8.0 + if coupled { 9.0 } else { 0.0 };
-    n * per_cell
+    let coupling = if coupled {
+        COUPLING_BYTES_PER_CELL
+    } else {
+        0.0
+    };
+    n * (buffers * 9.0 * bytes + 2.0 + 4.0 * 8.0 + coupling)
 }
+
+/// What a coupled run holds per lattice cell beyond the fluid's (bytes): the covering-grain
+/// maps and marks, the partially saturated cells' shares and the snapshot's conversions, as
+/// the resident memory of a 50.9 M-cell coupled run measured it.
+pub const COUPLING_BYTES_PER_CELL: f64 = 43.0;
 
 /// Bytes per grain: its state, its contacts' history and its neighbour lists (about).
 pub const GRAIN_BYTES: f64 = 1024.0;

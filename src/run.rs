@@ -399,7 +399,9 @@ fn run_typed<T: Real + hdf5::H5Type>(
         scene.units.dt_s,
         opts.progress && comm.is_root(),
     );
-    let plan = LoopPlan::new(n, &scene.scene.output, &opts.out_dir, resume.map(|_| 0.0));
+    let output = &scene.scene.output;
+    let next = resume.map(|s| crate::time_loop::next_output_after(scene.units.time_si(s), output));
+    let plan = LoopPlan::new(n, output, &opts.out_dir, next);
     let end = drive(&mut stepper, &plan, &mut progress, comm)?;
     summarise(
         scene,

@@ -269,7 +269,9 @@ fn finish(
     comm: &dyn Comm,
 ) -> Result<(), RunError> {
     let step = stepper.steps_done();
-    if written.0 != Some(step) {
+    // A restart that takes no step has nothing new to write.
+    let moved = step > end.start_step || !plan.restarted;
+    if moved && written.0 != Some(step) {
         // A step that fails leaves the step count where it was: its snapshot is then the
         // last good state.
         let t = Instant::now();
@@ -283,6 +285,15 @@ fn finish(
         clock.add("checkpoint", t);
     }
     Ok(())
+}
+
+/// The first snapshot time of a time cadence after `t` (s), for a restart whose checkpoint
+/// does not store it (the fluid's): the next whole multiple of `every_s`.
+pub fn next_output_after(t: f64, output: &Output) -> f64 {
+    match output.cadence() {
+        Cadence::Seconds(every) => ((t / every).floor() + 1.0) * every,
+        _ => 0.0,
+    }
 }
 
 /// The step a grain or MPM run stops after: `--steps`, else `--end-time`, else the scene's

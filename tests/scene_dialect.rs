@@ -249,3 +249,40 @@ fn every_kind_of_run_takes_the_same_length_and_cadence_keys() {
         assert!(steps.len() >= 4, "{kind}: snapshots at {steps:?}");
     }
 }
+
+#[test]
+fn a_restart_keeps_the_time_cadence_of_an_uninterrupted_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = read(FLUID);
+    let start = text.find("[output]").unwrap();
+    let stop = text[start..]
+        .find("\n[")
+        .map_or(text.len(), |k| start + k + 1);
+    // Δt = 6 ms in this scene: a snapshot every 10 steps' time, a checkpoint at the end.
+    text.replace_range(
+        start..stop,
+        "[output]\nevery_s = 0.0599999999\ncheckpoint_at_end = true\n",
+    );
+    let full = run(&text, dir.path(), "full", &["--steps", "40"]);
+    let cut = run(&text, dir.path(), "cut", &["--steps", "20"]);
+    let ck = cut.join("checkpoint.h5");
+    let scene = common::root().join("tests/scenes/__dialect_restart.toml");
+    std::fs::write(&scene, &text).unwrap();
+    let o = grainflow(
+        1,
+        &[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            cut.to_str().unwrap(),
+            "--steps",
+            "40",
+            "--restart",
+            ck.to_str().unwrap(),
+        ],
+    );
+    std::fs::remove_file(&scene).ok();
+    assert!(o.status.code().is_some_and(|c| c == 0 || c == 2));
+    assert_eq!(snapshot_steps(&full), vec![0, 10, 20, 30, 40]);
+    assert_eq!(snapshot_steps(&cut), snapshot_steps(&full));
+}

@@ -421,12 +421,7 @@ impl ValidGrainScene {
     /// An error about `key` of this scene that only shows once the scene is being built
     /// (no line: the key may stand for a sample file).
     pub fn invalid(&self, key: &str, message: String) -> SceneError {
-        SceneError::Invalid {
-            path: self.path.clone(),
-            line: None,
-            key: key.into(),
-            message,
-        }
+        SceneError::unlocated(&self.path, key, message)
     }
 
     /// The contact law of the scene.

@@ -68,6 +68,19 @@ pub enum SceneError {
     },
 }
 
+impl SceneError {
+    /// An `Invalid` error about `key` of the scene at `path`, with no line (the key may
+    /// stand for a sample or a file, known only once the scene is being built).
+    pub fn unlocated(path: &Path, key: &str, message: String) -> Self {
+        SceneError::Invalid {
+            path: path.to_owned(),
+            line: None,
+            key: key.into(),
+            message,
+        }
+    }
+}
+
 /// A scene that passed validation.
 #[derive(Debug, Clone)]
 pub struct ValidScene {
@@ -87,12 +100,7 @@ impl ValidScene {
     /// An error about `key` of this scene that only shows once the scene is being built
     /// (no line: the key may stand for a sample or a file).
     pub fn invalid(&self, key: &str, message: String) -> SceneError {
-        SceneError::Invalid {
-            path: self.path.clone(),
-            line: None,
-            key: key.into(),
-            message,
-        }
+        SceneError::unlocated(&self.path, key, message)
     }
 }
 
