@@ -3,6 +3,7 @@
 //! `check` prints the same figures `run` judges; `--force` overrides the refusal.
 
 use crate::error::RunError;
+use decomposition::Comm;
 
 /// Most steps a run may take without `--force`: 10⁹ steps are weeks of cluster time even
 /// on a small grid; more is almost always a unit slip (an end time in ms given as s, a
@@ -26,24 +27,10 @@ pub fn machine_memory_bytes() -> Option<f64> {
     Some(kib * 1024.0)
 }
 
-/// Ranks that share this node: the launcher's count where it says (Open MPI, MPICH, Slurm),
-/// otherwise all `ranks` (the conservative guess).
-pub fn ranks_on_this_node(ranks: usize) -> usize {
-    [
-        "OMPI_COMM_WORLD_LOCAL_SIZE",
-        "MPI_LOCALNRANKS",
-        "SLURM_NTASKS_PER_NODE",
-    ]
-    .iter()
-    .find_map(|v| std::env::var(v).ok()?.trim().parse::<usize>().ok())
-    .filter(|&n| n >= 1)
-    .unwrap_or(ranks)
-    .min(ranks.max(1))
-}
-
-/// Why `cost` on `ranks` ranks should not start, with the figures and the fix; `None` when
-/// it may. `memory` is this node's memory (bytes), when known.
-pub fn objection(cost: Cost, ranks: usize, memory: Option<f64>) -> Option<String> {
+/// Why `cost` on `ranks` ranks, `here` of them on this node, should not start, with the
+/// figures and the fix; `None` when it may. `memory` is this node's memory (bytes), when
+/// known.
+pub fn objection(cost: Cost, ranks: usize, here: usize, memory: Option<f64>) -> Option<String> {
     if cost.steps > MAX_STEPS {
         return Some(format!(
             "the run would take {} steps, more than {MAX_STEPS:.0e}: check the end time and the \
@@ -52,22 +39,23 @@ pub fn objection(cost: Cost, ranks: usize, memory: Option<f64>) -> Option<String
         ));
     }
     let ranks = ranks.max(1);
-    let on_node = cost.memory_bytes / ranks as f64 * ranks_on_this_node(ranks) as f64;
+    let here = here.clamp(1, ranks);
+    let on_node = cost.memory_bytes / ranks as f64 * here as f64;
     match memory {
         Some(m) if !(on_node <= m) => Some(format!(
-            "the run needs about {:.1} GiB on this node ({} rank(s) here of {ranks}), more \
+            "the run needs about {:.1} GiB on this node ({here} rank(s) here of {ranks}), more \
              than its {:.1} GiB: run on more nodes, coarsen the grid, or pass --force",
             on_node / GIB,
-            ranks_on_this_node(ranks),
             m / GIB
         )),
         _ => None,
     }
 }
 
-/// Refuse `cost` unless it fits (or `force`).
-pub fn admit(cost: Cost, ranks: usize, force: bool) -> Result<(), RunError> {
-    match objection(cost, ranks, machine_memory_bytes()) {
+/// Refuse `cost` on the ranks of `comm` unless it fits (or `force`).
+pub fn admit(cost: Cost, comm: &dyn Comm, force: bool) -> Result<(), RunError> {
+    let memory = machine_memory_bytes();
+    match objection(cost, comm.size(), comm.ranks_on_node(), memory) {
         Some(why) if !force => Err(RunError::TooLarge(why)),
         _ => Ok(()),
     }
@@ -133,27 +121,29 @@ mod tests {
             steps: 1000,
             memory_bytes: 2.0 * gib,
         };
-        assert_eq!(objection(fits, 1, Some(4.0 * gib)), None);
+        assert_eq!(objection(fits, 1, 1, Some(4.0 * gib)), None);
         let long = Cost {
             steps: MAX_STEPS + 1,
             ..fits
         };
-        assert!(objection(long, 1, Some(4.0 * gib))
+        assert!(objection(long, 1, 1, Some(4.0 * gib))
             .unwrap()
             .contains("steps"));
         let big = Cost {
             memory_bytes: 16.0 * gib,
             ..fits
         };
-        let why = objection(big, 1, Some(4.0 * gib)).unwrap();
+        let why = objection(big, 1, 1, Some(4.0 * gib)).unwrap();
         assert!(why.contains("16.0 GiB") && why.contains("--force"), "{why}");
+        // Spread over 8 nodes of 4 GiB, one rank each, it fits.
+        assert_eq!(objection(big, 8, 1, Some(4.0 * gib)), None);
         // Unknown memory: only the steps are judged.
-        assert_eq!(objection(big, 1, None), None);
+        assert_eq!(objection(big, 1, 1, None), None);
         // A NaN estimate is refused, not waved through.
         let nan = Cost {
             memory_bytes: f64::NAN,
             ..fits
         };
-        assert!(objection(nan, 1, Some(4.0 * gib)).is_some());
+        assert!(objection(nan, 1, 1, Some(4.0 * gib)).is_some());
     }
 }

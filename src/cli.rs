@@ -82,7 +82,7 @@ pub enum Command {
     Check {
         /// Scene file (TOML).
         scene: PathBuf,
-        /// Ranks the run will use: the memory per node is judged for them.
+        /// Ranks the run will use, judged as if they all shared this node (its memory).
         #[arg(long, default_value_t = 1)]
         ranks: usize,
     },

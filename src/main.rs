@@ -185,7 +185,8 @@ fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
         "  memory: about {:.1} MiB in all, {ranks} rank(s)",
         cost.memory_bytes / 1048576.0
     );
-    if let Some(why) = budget::objection(cost, ranks, budget::machine_memory_bytes()) {
+    // Judged as if all the ranks shared this node (a login node, say, cannot know).
+    if let Some(why) = budget::objection(cost, ranks, ranks, budget::machine_memory_bytes()) {
         println!("  refused: {why}");
         return Ok(1);
     }

@@ -365,7 +365,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         && crate::simulation::in_place(devices.2, scene.scene.grains.is_some());
     let bytes = std::mem::size_of::<T>() as f64;
     let cost = crate::budget::fluid_cost(scene, n, bytes, one_buffer);
-    crate::budget::admit(cost, comm.size(), opts.force)?;
+    crate::budget::admit(cost, comm, opts.force)?;
     let (sim, totals_initial, momentum_initial, grains_initial) =
         set_up::<T>(scene, opts, devices, comm)?;
     let lattice = sim.fluid.lattice();

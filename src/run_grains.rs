@@ -222,7 +222,7 @@ pub fn run_grains(
         steps: last_step.saturating_sub(d.system.steps),
         memory_bytes: grains as f64 * crate::budget::GRAIN_BYTES,
     };
-    crate::budget::admit(cost, comm.size(), opts.force)?;
+    crate::budget::admit(cost, comm, opts.force)?;
     let mut progress = Progress::new(
         last_step,
         grains as f64,

@@ -271,7 +271,7 @@ pub fn run_mpm(
     );
     let done = resume.map_or(0, |r| r.step);
     let cost = crate::budget::mpm_cost(scene, last_step.saturating_sub(done));
-    crate::budget::admit(cost, comm.size(), opts.force)?;
+    crate::budget::admit(cost, comm, opts.force)?;
     let mut sys = MpmSystem::new(scene.setup.clone(), points, comm)?;
     let initial_shape = match (&resume, collapse_of(s).0) {
         (Some(r), _) => r.initial_shape_m,

@@ -12,28 +12,34 @@ pub(crate) struct Context<'a> {
     pub base_dir: &'a Path,
 }
 
+/// 1-based line of the `nth` occurrence (0-based) of `key = …` in `text`: `key` a whole
+/// word, outside comments.
+pub(crate) fn line_of_key(text: &str, key: &str, nth: usize) -> Option<usize> {
+    let mut seen = 0;
+    for (i, line) in text.lines().enumerate() {
+        let code = line.split('#').next().unwrap_or("");
+        let mut rest = code;
+        while let Some(pos) = rest.find(key) {
+            let before = rest[..pos].chars().last();
+            let after = rest[pos + key.len()..].trim_start();
+            let word_start = before.is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+            if word_start && after.starts_with('=') {
+                if seen == nth {
+                    return Some(i + 1);
+                }
+                seen += 1;
+                break;
+            }
+            rest = &rest[pos + key.len()..];
+        }
+    }
+    None
+}
+
 impl Context<'_> {
     /// 1-based line of the `nth` occurrence (0-based) of `key = …` in the text.
     fn line_of(&self, key: &str, nth: usize) -> Option<usize> {
-        let mut seen = 0;
-        for (i, line) in self.text.lines().enumerate() {
-            let code = line.split('#').next().unwrap_or("");
-            let mut rest = code;
-            while let Some(pos) = rest.find(key) {
-                let before = rest[..pos].chars().last();
-                let after = rest[pos + key.len()..].trim_start();
-                let word_start = before.is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
-                if word_start && after.starts_with('=') {
-                    if seen == nth {
-                        return Some(i + 1);
-                    }
-                    seen += 1;
-                    break;
-                }
-                rest = &rest[pos + key.len()..];
-            }
-        }
-        None
+        line_of_key(self.text, key, nth)
     }
 
     /// An `Invalid` error for the `nth` occurrence of `key`.

@@ -51,15 +51,11 @@ pub(crate) fn check(table: &toml::Table, text: &str, path: &Path) -> Result<(), 
     Ok(())
 }
 
-/// 1-based line of the first `key =` or `[key]` in `text`.
+/// 1-based line of the first `[key]` header or `key =` in `text`.
 fn line_of(text: &str, key: &str) -> Option<usize> {
+    let header = format!("[{key}]");
     text.lines()
-        .position(|l| {
-            let code = l.split('#').next().unwrap_or("").trim();
-            code == format!("[{key}]")
-                || code
-                    .strip_prefix(key)
-                    .is_some_and(|rest| rest.trim_start().starts_with('='))
-        })
+        .position(|l| l.split('#').next().unwrap_or("").trim() == header)
         .map(|i| i + 1)
+        .or_else(|| super::context::line_of_key(text, key, 0))
 }

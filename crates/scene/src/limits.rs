@@ -30,7 +30,7 @@ pub(crate) fn refuse_non_finite(text: &str, path: &Path) -> Result<(), SceneErro
         None => Ok(()),
         Some((key, v)) => Err(SceneError::Invalid {
             path: path.to_owned(),
-            line: super::unknown::line_of(text, key.rsplit('.').next().unwrap_or(&key)),
+            line: super::unknown::line_of(text, &key),
             message: format!("must be a finite number, got {v}"),
             key,
         }),

@@ -26,7 +26,7 @@ pub(crate) fn refuse_ignored<T: Serialize>(
         None => Ok(()),
         Some((key_path, tag)) => Err(SceneError::Invalid {
             path: path.to_owned(),
-            line: line_of(raw_text, key_path.rsplit('.').next().unwrap_or(&key_path)),
+            line: line_of(raw_text, &key_path),
             message: match tag {
                 Some(tag) => format!(
                     "unknown key: `{tag}` takes no parameter here; remove it (or choose a \
@@ -80,17 +80,9 @@ fn first_ignored(
     }
 }
 
-/// 1-based line of the first `key =` in `text`.
-pub(crate) fn line_of(text: &str, key: &str) -> Option<usize> {
-    let key = key.split('[').next().unwrap_or(key);
-    text.lines()
-        .position(|l| {
-            let code = l.split('#').next().unwrap_or("");
-            code.match_indices(key).any(|(i, _)| {
-                let before = code[..i].chars().last();
-                let word = before.is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
-                word && code[i + key.len()..].trim_start().starts_with('=')
-            })
-        })
-        .map(|i| i + 1)
+/// 1-based line of the last key of `key_path` (`a.b[2].c` → `c = …`) in `text`.
+pub(crate) fn line_of(text: &str, key_path: &str) -> Option<usize> {
+    let last = key_path.rsplit('.').next().unwrap_or(key_path);
+    let key = last.split('[').next().unwrap_or(last);
+    super::context::line_of_key(text, key, 0)
 }
