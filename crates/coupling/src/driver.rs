@@ -619,12 +619,40 @@ impl LbmDem {
                 position: [all[1], all[2]],
             });
         }
+        self.check_speeds(comm)?;
         // The owned set may have changed (migration); the loads are recomputed before use.
         let owned = self.dem.system.owned();
         self.load.resize(owned, [0.0; 3]);
         self.handover.resize(owned, [0.0; 3]);
         self.refresh_views(comm);
         Ok(())
+    }
+
+    /// Errors (on every rank) when a grain moves faster than the lattice's speed of sound
+    /// c_s = 1/√3 cells per step, the lowest id first. Collective.
+    fn check_speeds(&self, comm: &dyn Comm) -> Result<(), CouplingError> {
+        let limit = self.units.velocity_to_si(1.0 / 3f64.sqrt());
+        let g = &self.dem.system.grains;
+        let mine: Vec<f64> = (0..self.dem.system.owned())
+            .filter(|&i| !(g.vx[i].hypot(g.vy[i]) <= limit))
+            .min_by_key(|&i| g.id[i])
+            .map(|i| vec![f64::from_bits(g.id[i]), g.vx[i].hypot(g.vy[i])])
+            .unwrap_or_default();
+        if !comm.any(!mine.is_empty()) {
+            return Ok(());
+        }
+        let all = comm.all_gather_f64(&mine);
+        let (grain, speed) = all
+            .chunks(2)
+            .map(|c| (c[0].to_bits(), c[1]))
+            .min_by_key(|c| c.0)
+            .unwrap_or((0, f64::NAN));
+        Err(CouplingError::TooFast {
+            step: self.step,
+            grain,
+            speed_lattice: self.units.velocity_to_lattice(speed),
+            speed_m_s: speed,
+        })
     }
 
     /// Stage "coupling" after the grains moved: see [`Coupler::remap`]; the hand-over is

@@ -45,6 +45,19 @@ pub enum CouplingError {
         /// The offending density.
         density: f64,
     },
+    /// A grain moves faster than the lattice's speed of sound: the fluid cannot carry the
+    /// disturbance it makes, and the coupling's results are meaningless.
+    #[error("unstable at step {step}: grain {grain} moves at {speed_lattice:.3} cells per step ({speed_m_s:.4e} m/s), faster than the lattice's speed of sound 1/√3 ≈ 0.577; lower the grains' speed in lattice units (smaller time step), or refine the lattice")]
+    TooFast {
+        /// Fluid step.
+        step: u64,
+        /// Grain id.
+        grain: u64,
+        /// Its speed in lattice units (cells per step).
+        speed_lattice: f64,
+        /// Its speed (m/s).
+        speed_m_s: f64,
+    },
     /// A grain left the fluid domain (through an open or periodic face).
     #[error("at step {step}: grain {grain} left the fluid domain at {position:?} m; grains cannot cross open or periodic faces yet: close the domain with walls or keep the grains away from them")]
     Left {

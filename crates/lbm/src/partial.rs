@@ -39,7 +39,8 @@ pub(crate) unsafe fn partial_cell<T: Real, C: Collider<T>>(
 /// `h`, their fluid collision `post` and the pre-collision moments `m`, and whether its
 /// density stayed positive (Noble & Torczynski 1998, eqs. 8–9; seed eqs. 5.53–5.54):
 /// f_i ← (1 − B) post_i + Σ_s B_s (h_i + Ω^s_i), in the lattice's precision like the
-/// collision itself. Each share's momentum goes to `mom`. `stride` is the lattice's row
+/// collision itself; a fully covered cell (B = 1) takes Σ_s B_s h^eq_i(ρ, u_s) instead
+/// ([`is_full`]). Each share's momentum goes to `mom`. `stride` is the lattice's row
 /// stride (the solids' velocities are taken at the cell centre).
 ///
 /// # Safety
@@ -54,7 +55,10 @@ pub(crate) unsafe fn blend_partial<T: Real>(
     post: &[T; Q],
     m: &Moments<T>,
 ) -> ([T; Q], bool) {
-    let mut new = fluid_part(post, T::from_f64(plan.total[n]));
+    let b_total = T::from_f64(plan.total[n]);
+    let mut new = fluid_part(post, b_total);
+    let full = is_full(b_total);
+    let mut solid = [T::default(); Q];
     let first = plan.start[n] as usize;
     let k = plan.cells[n] as usize;
     let y = PsmPlan::row_of(stride, k);
@@ -63,11 +67,47 @@ pub(crate) unsafe fn blend_partial<T: Real>(
         .enumerate()
     {
         let u = plan.velocity(stride, k, y, share).map(T::from_f64);
-        let p = add_share(&mut new, h, m, T::from_f64(share.b), u);
+        let b = T::from_f64(share.b);
+        let p = add_share(&mut new, h, m, b, u);
+        if full {
+            add_solid_equilibrium(&mut solid, m, b, u);
+        }
         mom.write(first + s, [-p[0].to_f64(), -p[1].to_f64()]);
+    }
+    if full {
+        new = solid;
     }
     let ok = density_ok(&new);
     (new, ok)
+}
+
+/// Whether a cell of total solid weight `b_total` (in the lattice's precision) is fully
+/// covered, B = 1 (the map gives a cell inside a disk ε = 1 exactly, and so B = 1).
+///
+/// Such a cell holds no fluid. Noble & Torczynski's B = 1 limit reflects its
+/// non-equilibrium part h_ī − h^eq_ī(ρ, u) in place every step and never relaxes it, so a
+/// large covered region keeps undamped oscillations that the grain's motion pumps (a disk
+/// of 64 cells per diameter settling at Re ≈ 250 went unstable inside itself). A full cell
+/// therefore takes the solids' equilibria Σ_s B_s h^eq_i(ρ, u_s): the same mass and, as
+/// that reflected part carries neither (Σ_i (h_ī − h^eq_ī) (1, c_i) = 0), the same momentum
+/// exchange as eq. 8 gives; only the non-equilibrium part is dropped.
+#[inline(always)]
+pub(crate) fn is_full<T: Real>(b_total: T) -> bool {
+    b_total >= T::from_f64(1.0)
+}
+
+/// Add B_s h^eq_i(ρ, u_s) (Qian et al. 1992, eq. 7, at the cell's density) to `solid`: one
+/// solid's part of a fully covered cell ([`is_full`]).
+#[inline(always)]
+pub(crate) fn add_solid_equilibrium<V: Simd>(solid: &mut [V; Q], m: &Moments<V>, b: V, u: [V; 2]) {
+    let eq = super::collision::equilibrium(&Moments {
+        ux: u[0],
+        uy: u[1],
+        ..*m
+    });
+    each_direction!(i => {
+        solid[i] = solid[i] + b * eq[i];
+    });
 }
 
 /// (1 − B) post_i: the fluid's part of a partially saturated cell whose solid weights add
@@ -451,7 +491,17 @@ impl<'a> PartialSweep<'a> {
             }
         };
         let mut new = fluid_part(post, Lanes(b_total));
-        let p = add_share(&mut new, h, m, Lanes(b), [Lanes(ux), Lanes(uy)]);
+        let (b, u) = (Lanes(b), [Lanes(ux), Lanes(uy)]);
+        let p = add_share(&mut new, h, m, b, u);
+        // Fully covered cells take the solid's equilibrium (`is_full`).
+        let full = (0..L).fold(0u32, |f, l| f | u32::from(is_full(b_total[l])) << l) & mask;
+        if full != 0 {
+            let mut solid = [Lanes([zero; L]); Q];
+            add_solid_equilibrium(&mut solid, m, b, u);
+            each_direction!(i => {
+                new[i] = Lanes::select(full, solid[i], new[i]);
+            });
+        }
         let mut sum = Lanes([T::from_f64(-0.0); L]);
         each_direction!(i => {
             sum = sum + new[i];
@@ -629,6 +679,46 @@ mod tests {
             p[1] += b * omega * CY[i] as f64;
         }
         (new, p)
+    }
+
+    /// A fully covered cell's solid equilibrium has the mass and momentum that
+    /// Noble & Torczynski's B = 1 limit gives it: only the reflected non-equilibrium part,
+    /// which carries neither, is dropped (`is_full`).
+    #[test]
+    fn full_cell_keeps_mass_and_momentum_and_drops_the_reflected_part() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || crate::test_rng::next(&mut seed) - 0.5;
+        for _ in 0..200 {
+            let h: [f64; Q] = std::array::from_fn(|_| 0.02 * next());
+            let drho: f64 = h.iter().sum();
+            let (jx, jy) = (0..Q).fold((0.0, 0.0), |(x, y), i| {
+                (x + h[i] * CX[i] as f64, y + h[i] * CY[i] as f64)
+            });
+            let rho = 1.0 + drho;
+            let m = Moments {
+                drho,
+                rho,
+                ux: jx / rho,
+                uy: jy / rho,
+            };
+            let u = [0.2 * next(), 0.2 * next()];
+            let mut by_eq8 = [0.0; Q];
+            add_share(&mut by_eq8, &h, &m, 1.0, u);
+            let mut solid = [0.0; Q];
+            add_solid_equilibrium(&mut solid, &m, 1.0, u);
+            let moment =
+                |f: &[f64; Q], c: &[i32; Q]| -> f64 { (0..Q).map(|i| f[i] * c[i] as f64).sum() };
+            let ones = [1; Q];
+            for c in [&ones, &CX, &CY] {
+                let (a, b) = (moment(&by_eq8, c), moment(&solid, c));
+                assert!((a - b).abs() < 1e-15, "moment {c:?}: {a} vs {b}");
+            }
+            // The solid's equilibrium moves at u_s.
+            assert!((moment(&solid, &CX) - rho * u[0]).abs() < 1e-15);
+            // And the reflected part is really dropped: the two differ.
+            assert!((0..Q).any(|i| (by_eq8[i] - solid[i]).abs() > 1e-6));
+        }
+        assert!(is_full(1.0f64) && !is_full(1.0f64 - 1e-15) && is_full(1.0f32));
     }
 
     #[test]

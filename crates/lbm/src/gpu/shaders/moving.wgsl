@@ -99,11 +99,19 @@ fn moving_psm(@builtin(global_invocation_id) gid: vec3<u32>,
     for (var i = 0u; i < 9u; i++) {
         res[i] = (real(1.0) - b_total) * post[i];
     }
+    // A fully covered cell takes the solids' equilibria Σ_s b_s f^eq(ρ, u_s): the same mass
+    // and momentum exchange, without the undamped reflected non-equilibrium part (the CPU's
+    // partial.rs, `is_full`).
+    var solid: array<real, 9>;
+    let full = b_total >= real(1.0);
     let first = mv_idx[2u + n + c];
     let last = mv_idx[3u + n + c];
     for (var s = first; s < last; s++) {
         let b = mv_real[n + s];
         let eq_solid = equilibrium(m.rho - real(1.0), m.rho, mv_real[n + ns + s], mv_real[n + 2u * ns + s]);
+        for (var i = 0u; i < 9u; i++) {
+            solid[i] += b * eq_solid[i];
+        }
         var px = real(0.0);
         var py = real(0.0);
         for (var i = 0u; i < 9u; i++) {
@@ -117,6 +125,9 @@ fn moving_psm(@builtin(global_invocation_id) gid: vec3<u32>,
         let out = n + 3u * ns + 2u * s;
         mv_real[out] = -px;
         mv_real[out + 1u] = -py;
+    }
+    if full {
+        res = solid;
     }
     store(k, res);
     var rho = real(1.0);
