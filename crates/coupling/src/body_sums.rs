@@ -19,8 +19,8 @@
 //! backend reports one momentum per link or share as before.
 
 use super::exchange::Coupler;
+use super::interface::Interface;
 use super::map::GrainView;
-use super::Scheme;
 use lbm::moving::NO_SLOT;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -31,27 +31,18 @@ const MARGIN: i64 = 2;
 impl Coupler {
     /// Body `b` of the current plan: its grain (view) and centre (the grain's or an image's).
     fn body(&self, b: usize) -> (usize, [f64; 2]) {
-        match self.scheme {
-            Scheme::Psm => {
-                let (g, c) = self.disk_images[b];
-                (g as usize, c)
-            }
-            _ => (self.body_grain[b] as usize, self.links.bodies[b].centre),
-        }
+        self.cells.body(b)
     }
 
-    /// Fill the boxes and groups of the body columns (`Coupler::body_columns`) for the plan
+    /// Fill the boxes and groups of the body columns (`Common::body_columns`) for the plan
     /// just built from `views`, when the fluid backend sums per body (`wanted`) and every
     /// grain is small against the lattice (see the module docs); otherwise leave them empty. A group is a run of bodies of one grain with one centre x: the
     /// grain's images across a periodic y face (`SlabFrame::images` lists them together).
     pub(super) fn box_bodies(&mut self, views: &[GrainView], wanted: bool) {
-        let mut out = std::mem::take(&mut self.body_columns);
+        let mut out = std::mem::take(&mut self.common.body_columns);
         out.clear();
-        let bodies = match self.scheme {
-            Scheme::Psm => self.disk_images.len(),
-            _ => self.links.bodies.len(),
-        };
-        let f = self.frame;
+        let bodies = self.cells.bodies();
+        let f = self.common.frame;
         let room = f.ny.min(f.global_nx) as f64;
         let small = views
             .iter()
@@ -101,21 +92,21 @@ impl Coupler {
                 out.first.push(slots);
             }
         }
-        self.body_columns = out;
+        self.common.body_columns = out;
     }
 
     /// The collect from the backend's per-group sums: each used slot is added to its
     /// grain's column sum (in group order; a grain's groups reach different columns); where
     /// the backend summed only some bodies (`BodyColumns::body_slot`), the others' shares
-    /// are collected one by one ([`Coupler::collect_psm_unslotted`]). Checks that the two
+    /// are collected one by one ([`Interface::collect_unslotted`]). Checks that the two
     /// hold every link or share of the plan.
     pub(super) fn collect_bodies(&mut self, views: &[GrainView]) {
-        let f = self.frame;
-        let cols = std::mem::take(&mut self.body_columns);
+        let f = self.common.frame;
+        let cols = std::mem::take(&mut self.common.body_columns);
         // The slots by bands of columns in parallel: a band's task adds its columns' slots
         // in group order, and a column's slot is no other column's, so every sum takes its
         // loads in the serial order.
-        let mut column_sums = std::mem::take(&mut self.sums);
+        let mut column_sums = std::mem::take(&mut self.common.sums);
         let seen = AtomicUsize::new(0);
         column_sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
             let mut n_band = 0;
@@ -141,18 +132,15 @@ impl Coupler {
             }
             seen.fetch_add(n_band, Ordering::Relaxed);
         });
-        self.sums = column_sums;
+        self.common.sums = column_sums;
         let mut seen = seen.into_inner();
         // The bodies the backend did not sum, if any, one share at a time.
         let unslotted = cols.body_slot.contains(&NO_SLOT);
-        self.body_columns = cols;
+        self.common.body_columns = cols;
         if unslotted {
-            seen += self.collect_psm_unslotted(views);
+            seen += self.cells.collect_unslotted(&mut self.common, views);
         }
-        let planned = match self.scheme {
-            Scheme::Psm => self.psm.shares.len(),
-            _ => self.links.links.len(),
-        };
+        let planned = self.cells.planned();
         assert_eq!(
             seen, planned,
             "the per-body sums must hold every link or share of the plan"
@@ -163,6 +151,7 @@ impl Coupler {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::link_cells::{Bouzidi, HalfWay, LinkRule};
     use crate::map::SlabFrame;
     use crate::sums::ColumnSums;
     use crate::test_slabs::{grains_at_rest, next, planned, slab};
@@ -231,20 +220,28 @@ mod tests {
     fn per_body_sums_give_the_per_link_column_sums() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
         for case in 0..4 {
-            for scheme in [Scheme::BounceBack, Scheme::Interpolated] {
+            per_body_sums_match::<HalfWay>(case, &mut seed);
+            per_body_sums_match::<Bouzidi>(case, &mut seed);
+        }
+    }
+
+    fn per_body_sums_match<R: LinkRule>(case: usize, seed: &mut u64) {
+        {
+            {
                 let (f, solid) = slab(case);
                 let fluid = |k: usize| !solid[k];
-                let views = grains_at_rest(&f, 30, &mut seed);
-                let mut c = planned(scheme, f, &views, &fluid);
-                let links = c.links.links.len();
+                let views = grains_at_rest(&f, 30, seed);
+                let mut c = planned::<R>(f, &views, &fluid);
+                let links = R::of(&mut c.cells).links.links.len();
                 assert!(links > 500, "case {case}: {links} links");
-                c.link_momentum = (0..links).map(|_| next(&mut seed) - 0.5).collect();
-                c.sums.reset(&views, f.global_nx);
-                c.collect_links(&views);
-                let want = all_partials(&c.sums, views.len());
+                R::of(&mut c.cells).link_momentum = (0..links).map(|_| next(seed) - 0.5).collect();
+                c.common.sums.reset(&views, f.global_nx);
+                c.cells.collect(&mut c.common, &views);
+                let want = all_partials(&c.common.sums, views.len());
                 // The same from per-body sums.
                 c.box_bodies(&views, true);
-                let (plan, m) = (&c.links, &c.link_momentum);
+                let cells = R::of(&mut c.cells);
+                let (plan, m) = (&cells.links, &cells.link_momentum);
                 let load = |l: usize, centre: [f64; 2]| {
                     let (i, b) = (plan.links[l].dir(), plan.links[l].body());
                     let image = plan.bodies[b].centre;
@@ -254,19 +251,25 @@ mod tests {
                     let (px, py) = (-m[l] * cx, -m[l] * cy);
                     (b, [px, py, arm[0] * py - arm[1] * px])
                 };
-                let mut cols = std::mem::take(&mut c.body_columns);
+                let mut cols = std::mem::take(&mut c.common.body_columns);
                 backend_sums(&f, (&plan.rows, &plan.cells, &plan.start), load, &mut cols);
-                c.body_columns = cols;
-                c.sums.reset(&views, f.global_nx);
+                c.common.body_columns = cols;
+                c.common.sums.reset(&views, f.global_nx);
                 c.collect_bodies(&views);
-                let got = all_partials(&c.sums, views.len());
+                let got = all_partials(&c.common.sums, views.len());
                 assert_eq!(got.len(), want.len(), "case {case}");
                 assert!(got == want, "case {case}: the column sums differ");
                 // A plan entry outside every box is caught, not lost.
-                let slot = c.body_columns.counts.iter().position(|&n| n > 0).unwrap();
-                c.body_columns.counts[slot] = 0;
+                let slot = c
+                    .common
+                    .body_columns
+                    .counts
+                    .iter()
+                    .position(|&n| n > 0)
+                    .unwrap();
+                c.common.body_columns.counts[slot] = 0;
                 let lost = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    c.sums.reset(&views, f.global_nx);
+                    c.common.sums.reset(&views, f.global_nx);
                     c.collect_bodies(&views)
                 }));
                 assert!(lost.is_err(), "case {case}: a lost link went unnoticed");
@@ -275,7 +278,7 @@ mod tests {
                 let mut big = views.clone();
                 big[0].radius = 0.5 * f.ny as f64 - 4.0;
                 c.box_bodies(&big, true);
-                assert!(!c.body_columns.wanted(), "case {case}");
+                assert!(!c.common.body_columns.wanted(), "case {case}");
             }
         }
     }

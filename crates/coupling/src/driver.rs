@@ -16,7 +16,7 @@ use decomposition::{Comm, SlabPartition};
 use dem::walls::{apply_walls, WallStates};
 use dem::{DemError, DemSetup, DemSystem, Grains, SlabDem};
 use lbm::lattice::{Face, FaceCondition};
-use lbm::moving::{MovingCells, PlanKind};
+use lbm::moving::MovingCells;
 use lbm::units::Units;
 use lbm::{FluidBackend, Lattice, Real};
 use rayon::prelude::*;
@@ -490,10 +490,7 @@ impl LbmDem {
     /// Stage "coupling" before the sweep: plan the cells at the grains' surfaces (see
     /// [`Coupler::plan`]).
     pub fn plan<T: Real>(&mut self, fluid: &dyn FluidBackend<T>) {
-        let kind = match self.coupler.scheme() {
-            super::Scheme::Psm => PlanKind::Partial,
-            _ => PlanKind::Links,
-        };
+        let kind = self.coupler.plan_kind();
         self.coupler
             .plan(fluid.lattice(), &self.views, fluid.sums_per_body(kind));
     }
@@ -517,7 +514,8 @@ impl LbmDem {
         self.agree(comm, bad)?;
         let t = std::time::Instant::now();
         self.load = self.reduce(Which::Exchange, comm);
-        self.coupler.passes[super::pass::REDUCE] += t.elapsed().as_secs_f64();
+        self.coupler
+            .add_pass(super::pass::REDUCE, t.elapsed().as_secs_f64());
         Ok(())
     }
 
@@ -556,7 +554,7 @@ impl LbmDem {
     }
 
     fn frame(&self) -> SlabFrame {
-        self.coupler.frame
+        self.coupler.frame()
     }
 
     /// Stage "dem": hold the hydrodynamic force (and the repulsion) and take the DEM
@@ -659,10 +657,11 @@ impl LbmDem {
     /// summed on the owners. Collective.
     pub fn remap<T: Real>(&mut self, fluid: &mut dyn FluidBackend<T>, comm: &dyn Comm) {
         self.coupler.remap(fluid, &self.views, &self.ids, comm);
-        if self.coupler.scheme() != super::Scheme::Psm {
+        if self.coupler.hands_over() {
             let t = std::time::Instant::now();
             self.handover = self.reduce(Which::Handover, comm);
-            self.coupler.passes[super::pass::REDUCE] += t.elapsed().as_secs_f64();
+            self.coupler
+                .add_pass(super::pass::REDUCE, t.elapsed().as_secs_f64());
         }
     }
 }

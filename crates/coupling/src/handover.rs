@@ -5,9 +5,11 @@
 
 use super::cover_update::Change;
 use super::exchange::{rigid_velocity, Coupler};
+use super::interface::{Common, Interface};
+use super::link_cells::{LinkCells, LinkRule};
 use super::map::neighbour;
-use super::map::{cover, nearest_image, set_cells, GrainView, NONE};
-use super::{Refill, Scheme};
+use super::map::{cover, nearest_image, set_cells, GrainView, SlabFrame, NONE};
+use super::Refill;
 use decomposition::Comm;
 use lbm::d2q9::{CX, CY, Q};
 use lbm::moving::Refill as CellRefill;
@@ -27,21 +29,59 @@ impl Coupler {
         ids: &[u64],
         comm: &dyn Comm,
     ) {
-        let t = std::time::Instant::now();
-        self.handover.reset(views, self.frame.global_nx);
-        if self.scheme == Scheme::Psm {
-            self.map_shares(fluid.lattice(), views);
-            self.owner_ids.clear();
-            self.owner_ids.extend_from_slice(ids);
-            self.passes[super::pass::MAP] += t.elapsed().as_secs_f64();
-            return;
+        let c = &mut self.common;
+        c.handover.reset(views, c.frame.global_nx);
+        self.cells.remap(&mut self.common, fluid, views, ids, comm);
+    }
+
+    /// Momentum of the fluid in this slab's interior cells that no grain covers (lattice
+    /// units), one partial sum per column (y increasing): the fluid half of the momentum
+    /// balance, to be added in column order over all ranks.
+    pub fn fluid_momentum_columns<T: Real>(
+        &self,
+        fluid: &mut dyn FluidBackend<T>,
+    ) -> Vec<[f64; 2]> {
+        let f = self.common.frame;
+        let lat = fluid.lattice();
+        let mut cells = Vec::new();
+        for x in 0..f.nx as i64 {
+            for y in 0..f.ny as i64 {
+                let k = f.padded(x, y);
+                if lat.is_fluid_at(k) && self.cells.is_open(k) {
+                    cells.push(k as u32);
+                }
+            }
         }
-        let f = self.frame;
+        let mut j = Vec::new();
+        fluid.momentum_of_cells(&cells, &mut j);
+        let mut columns = vec![[0.0; 2]; f.nx];
+        for (&k, m) in cells.iter().zip(&j) {
+            let c = &mut columns[(f.local(k as usize).0) as usize];
+            c[0] += m[0];
+            c[1] += m[1];
+        }
+        columns
+    }
+}
+
+impl<R: LinkRule> LinkCells<R> {
+    /// [`Coupler::remap`] for the bounce-back schemes: the cover map follows the grains,
+    /// and the cells that change hands are handed over into `c.handover`.
+    pub(super) fn remap_links<T: Real>(
+        &mut self,
+        c: &mut Common,
+        fluid: &mut dyn FluidBackend<T>,
+        views: &[GrainView],
+        ids: &[u64],
+        comm: &dyn Comm,
+    ) {
+        let t = std::time::Instant::now();
+        let f = c.frame;
         // The same grains in view: update the map in place (`cover_update.rs`); otherwise
         // map afresh into `next_owner` and compare.
         let in_place = {
             let lat = fluid.lattice();
-            self.owner_ids == ids
+            c.owner_ids == ids
                 && self.update.changes(
                     &f,
                     views,
@@ -55,10 +95,10 @@ impl Coupler {
             self.in_place_remaps += 1;
         } else {
             self.fresh_remaps += 1;
-            self.changes_afresh(fluid.lattice(), views, ids);
+            self.changes_afresh(c, fluid.lattice(), views, ids);
             self.update.reset(views);
         }
-        self.passes[super::pass::MAP] += t.elapsed().as_secs_f64();
+        c.passes[super::pass::MAP] += t.elapsed().as_secs_f64();
         let t = std::time::Instant::now();
         // Refills average whole neighbour cells, across faces too: the halos must hold
         // them now, as one rank would see them.
@@ -70,27 +110,27 @@ impl Coupler {
         let mut events: Vec<(u32, u32, bool)> = std::mem::take(&mut self.events);
         events.clear();
         let (nx, ny) = (f.nx as i64, f.ny as i64);
-        for c in &self.changes {
-            let (x, y) = f.local(c.cell as usize);
+        for ch in &self.changes {
+            let (x, y) = f.local(ch.cell as usize);
             if x < 0 || y < 0 || x >= nx || y >= ny {
                 continue;
             }
-            if c.old == NONE {
+            if ch.old == NONE {
                 // Covered: the grain takes the cell's momentum (Aidun, Lu & Ding 1998).
-                events.push((c.cell, c.new, true));
-            } else if c.new == NONE {
+                events.push((ch.cell, ch.new, true));
+            } else if ch.new == NONE {
                 // Uncovered, by a grain that is still in view (it moved less than a cell).
-                if let Some(g) = new_index(self.owner_ids[c.old as usize]) {
-                    events.push((c.cell, g as u32, false));
+                if let Some(g) = new_index(c.owner_ids[ch.old as usize]) {
+                    events.push((ch.cell, g as u32, false));
                 }
             }
         }
         events.sort_unstable_by_key(|&(k, g, covered)| (covered, g, k));
         // From here on a cell counts as covered when it is covered before or after the
         // move: the newly covered ones are written now, the uncovered ones cleared last.
-        for c in &self.changes {
-            if c.old == NONE {
-                self.owner[c.cell as usize] = c.new;
+        for ch in &self.changes {
+            if ch.old == NONE {
+                self.owner[ch.cell as usize] = ch.new;
             }
         }
         self.newly.clear();
@@ -100,7 +140,7 @@ impl Coupler {
             if covered {
                 self.newly.push(k);
             } else {
-                let r = self.refill_for(k as usize, &views[g as usize], |m| lat.is_fluid_at(m));
+                let r = self.refill_for(&f, k as usize, &views[g as usize], |m| lat.is_fluid_at(m));
                 self.refills.push(r);
             }
         }
@@ -117,19 +157,19 @@ impl Coupler {
             };
             let p = f.centre(k as usize);
             let grain = &views[g as usize];
-            let c = nearest_image(&f, grain, p);
-            let r = [p[0] - c[0], p[1] - c[1]];
+            let image = nearest_image(&f, grain, p);
+            let r = [p[0] - image[0], p[1] - image[1]];
             let load = [sign * j[0], sign * j[1], sign * (r[0] * j[1] - r[1] * j[0])];
-            let col = self.column(k as usize);
-            self.handover
-                .add(g as usize, grain.centre[0], c[0], col, load);
+            let col = c.column(k as usize);
+            c.handover
+                .add(g as usize, grain.centre[0], image[0], col, load);
         }
         self.events = events;
         self.lists.follow(ids);
         if in_place {
             self.lists.mark_near(&f, &self.changes, &self.owner);
-            for c in &self.changes {
-                self.owner[c.cell as usize] = c.new;
+            for ch in &self.changes {
+                self.owner[ch.cell as usize] = ch.new;
             }
         } else {
             self.lists.mark_all();
@@ -139,29 +179,35 @@ impl Coupler {
             for &k in self.old_cells.iter() {
                 self.next_owner[k as usize] = NONE;
             }
-            for c in &self.changes {
-                self.next_owner[c.cell as usize] = NONE;
+            for ch in &self.changes {
+                self.next_owner[ch.cell as usize] = NONE;
             }
         }
-        self.mapped.clear();
-        self.mapped.extend_from_slice(views);
-        self.owner_ids.clear();
-        self.owner_ids.extend_from_slice(ids);
-        self.passes[super::pass::HANDOVER] += t.elapsed().as_secs_f64();
+        c.mapped.clear();
+        c.mapped.extend_from_slice(views);
+        c.owner_ids.clear();
+        c.owner_ids.extend_from_slice(ids);
+        c.passes[super::pass::HANDOVER] += t.elapsed().as_secs_f64();
         let t = std::time::Instant::now();
-        self.rebuild_lists(fluid.lattice(), views);
-        self.passes[super::pass::LISTS] += t.elapsed().as_secs_f64();
+        self.rebuild_lists(&f, fluid.lattice(), views);
+        c.passes[super::pass::LISTS] += t.elapsed().as_secs_f64();
     }
 
     /// Map the grains `views` (ids `ids`) afresh into `next_owner` and list in `changes`
     /// every cell whose owner's id differs from `owner`'s (old owners as indices into
     /// `owner_ids`, new ones into `ids`). `old_cells` receives the cells set in `owner`.
-    fn changes_afresh<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView], ids: &[u64]) {
-        let f = self.frame;
+    fn changes_afresh<T: Real>(
+        &mut self,
+        c: &Common,
+        lat: &Lattice<T>,
+        views: &[GrainView],
+        ids: &[u64],
+    ) {
+        let f = c.frame;
         let fluid = |k: usize| lat.is_fluid_at(k);
         set_cells(
             &f,
-            &self.mapped,
+            &c.mapped,
             &self.owner,
             &mut self.mark,
             &mut self.old_cells,
@@ -186,7 +232,7 @@ impl Coupler {
             }
             self.mark[ku] = true;
             let (old, new) = (self.owner[ku], self.next_owner[ku]);
-            let old_id = (old != NONE).then(|| self.owner_ids[old as usize]);
+            let old_id = (old != NONE).then(|| c.owner_ids[old as usize]);
             let new_id = (new != NONE).then(|| ids[new as usize]);
             if old_id != new_id {
                 self.changes.push(Change { cell: k, old, new });
@@ -200,8 +246,14 @@ impl Coupler {
     /// How to refill padded cell `k` that grain `g` has just uncovered: its neighbours
     /// (halo ones too) that are fluid outside every grain (before and after the move), and
     /// the one most nearly along the surface normal for [`Refill::Extrapolation`].
-    fn refill_for(&self, k: usize, g: &GrainView, fluid: impl Fn(usize) -> bool) -> CellRefill {
-        let f = self.frame;
+    fn refill_for(
+        &self,
+        f: &SlabFrame,
+        k: usize,
+        g: &GrainView,
+        fluid: impl Fn(usize) -> bool,
+    ) -> CellRefill {
+        let f = *f;
         let p = f.centre(k);
         let c = nearest_image(&f, g, p);
         let normal = [p[0] - c[0], p[1] - c[1]];
@@ -229,34 +281,5 @@ impl Coupler {
             extrapolate,
             velocity: rigid_velocity(&f, g, p),
         }
-    }
-
-    /// Momentum of the fluid in this slab's interior cells that no grain covers (lattice
-    /// units), one partial sum per column (y increasing): the fluid half of the momentum
-    /// balance, to be added in column order over all ranks.
-    pub fn fluid_momentum_columns<T: Real>(
-        &self,
-        fluid: &mut dyn FluidBackend<T>,
-    ) -> Vec<[f64; 2]> {
-        let f = self.frame;
-        let lat = fluid.lattice();
-        let mut cells = Vec::new();
-        for x in 0..f.nx as i64 {
-            for y in 0..f.ny as i64 {
-                let k = f.padded(x, y);
-                if lat.is_fluid_at(k) && (self.scheme == Scheme::Psm || self.owner[k] == NONE) {
-                    cells.push(k as u32);
-                }
-            }
-        }
-        let mut j = Vec::new();
-        fluid.momentum_of_cells(&cells, &mut j);
-        let mut columns = vec![[0.0; 2]; f.nx];
-        for (&k, m) in cells.iter().zip(&j) {
-            let c = &mut columns[(f.local(k as usize).0) as usize];
-            c[0] += m[0];
-            c[1] += m[1];
-        }
-        columns
     }
 }

@@ -2,19 +2,20 @@
 //! grain overlaps is collided as a blend of the fluid's operator and the solid's, weighted by
 //! the exact solid fraction.
 
-use super::exchange::Coupler;
 use super::gather::{group_by_row, row_of, Shared};
 use super::geometry::{
     box_lines, column_line, row_line, CellAreas, ColumnLine, RowLine, TABLE_PAD,
 };
-use super::map::{share_rows, GrainView, Share, ShareRow};
+use super::interface::Common;
+use super::map::{share_rows, GrainView, Share, ShareRow, SlabFrame};
+use super::partial_cells::PartialCells;
 use super::row_walk::shares_in_row;
 use lbm::moving::{SolidShare, NO_SLOT};
 use lbm::{Lattice, Real};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-impl Coupler {
+impl PartialCells {
     /// The solid fraction of every interior fluid cell each grain overlaps, row by row
     /// (in parallel over the rows), each row's grains in id order, each grain's images in
     /// turn, cells in increasing x; then each row sorted by cell (a cell's shares keep that
@@ -22,8 +23,13 @@ impl Coupler {
     /// (cell, image)). Fills `share_rows`. The exact areas come from per-image tables of
     /// the grid lines around each disk (built in parallel first), so a cell costs no square
     /// root or arcsine.
-    pub(super) fn map_shares<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
-        let f = self.frame;
+    pub(super) fn map_shares<T: Real>(
+        &mut self,
+        f: &SlabFrame,
+        lat: &Lattice<T>,
+        views: &[GrainView],
+    ) {
+        let f = *f;
         // The grain images that reach the slab's rows, each one's rows, and where its line
         // tables start (a box's lines are counted here, so the tables take one parallel
         // pass: each pass costs the pool a wake-up).
@@ -146,8 +152,13 @@ impl Coupler {
     /// each cell's shares in grain order): the order is the restriction of a
     /// partition-independent one (rows, then global x). Each share's body is its grain
     /// image, whose rigid motion the sweep takes the solid's velocity from.
-    pub(super) fn plan_psm<T: Real>(&mut self, lat: &Lattice<T>, views: &[GrainView]) {
-        let f = self.frame;
+    pub(super) fn plan_psm<T: Real>(
+        &mut self,
+        f: &SlabFrame,
+        lat: &Lattice<T>,
+        views: &[GrainView],
+    ) {
+        let f = *f;
         let tau = lat.tau0();
         let plan = &mut self.psm;
         let disks = &self.disk_images;
@@ -203,44 +214,49 @@ impl Coupler {
 
     /// Add each share's momentum (as the sweep reported it) to its grain's column sums, in
     /// plan order (in parallel over bands of columns).
-    pub(super) fn collect_psm(&mut self, views: &[GrainView]) {
-        self.collect_psm_where(views, None);
+    pub(super) fn collect_psm(&mut self, c: &mut Common, views: &[GrainView]) {
+        self.collect_psm_where(c, views, None);
     }
 
-    /// [`Coupler::collect_psm`] for the shares of the bodies the backend did not sum
+    /// [`PartialCells::collect_psm`] for the shares of the bodies the backend did not sum
     /// (`BodyColumns::body_slot` is `NO_SLOT`), on the rows their boxes reach. Returns how
     /// many shares it added.
-    pub(super) fn collect_psm_unslotted(&mut self, views: &[GrainView]) -> usize {
+    pub(super) fn collect_psm_unslotted(&mut self, c: &mut Common, views: &[GrainView]) -> usize {
         let mut rows = std::mem::take(&mut self.rest_rows);
         rows.clear();
-        rows.resize(self.frame.ny, false);
-        let cols = &self.body_columns;
+        rows.resize(c.frame.ny, false);
+        let cols = &c.body_columns;
         for (bx, &slot) in cols.boxes.iter().zip(&cols.body_slot) {
             if slot == NO_SLOT {
                 rows[bx[2] as usize..(bx[2] + bx[3]) as usize].fill(true);
             }
         }
-        let n = self.collect_psm_where(views, Some(&rows));
+        let n = self.collect_psm_where(c, views, Some(&rows));
         self.rest_rows = rows;
         n
     }
 
-    /// [`Coupler::collect_psm`], or with `rows` only the shares of the bodies the backend
+    /// [`PartialCells::collect_psm`], or with `rows` only the shares of the bodies the backend
     /// did not sum, on the rows marked there. Returns how many shares it added.
-    fn collect_psm_where(&mut self, views: &[GrainView], rows: Option<&[bool]>) -> usize {
-        let f = self.frame;
+    fn collect_psm_where(
+        &mut self,
+        c: &mut Common,
+        views: &[GrainView],
+        rows: Option<&[bool]>,
+    ) -> usize {
+        let f = c.frame;
         // Each grain image's window of its grain's column sums.
-        let mut windows = std::mem::take(&mut self.body_windows);
+        let mut windows = std::mem::take(&mut c.body_windows);
         windows.clear();
         windows.extend(self.disk_images.iter().map(|&(g, image)| {
             let g = g as usize;
-            self.sums.window(g, views[g].centre[0], image[0])
+            c.sums.window(g, views[g].centre[0], image[0])
         }));
         let (plan, momentum) = (&self.psm, &self.share_momentum);
         let (disks, win) = (&self.disk_images, &windows);
-        let slots = &self.body_columns.body_slot;
+        let slots = &c.body_columns.body_slot;
         let added = AtomicUsize::new(0);
-        self.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
+        c.sums.fill_by_columns(f.x0, f.x0 + f.nx, |band, sums| {
             let mut n = 0;
             let wanted = |y: usize| rows.is_none_or(|r| r[y]);
             f.band_cells_sorted(&plan.rows, &plan.cells, &band, wanted, |c, col, centre| {
@@ -260,7 +276,7 @@ impl Coupler {
             });
             added.fetch_add(n, Ordering::Relaxed);
         });
-        self.body_windows = windows;
+        c.body_windows = windows;
         added.into_inner()
     }
 }

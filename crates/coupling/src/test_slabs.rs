@@ -2,8 +2,10 @@
 //! and the slabs the tests move grains over.
 
 use super::exchange::Coupler;
+use super::interface::{Cells, Common};
+use super::link_cells::{LinkCells, LinkRule};
 use super::map::{cover, GrainView, SlabFrame};
-use super::{Refill, Scheme};
+use super::Refill;
 
 pub use lbm::test_rng::next;
 
@@ -42,21 +44,33 @@ pub fn grains_at_rest(f: &SlabFrame, n: usize, seed: &mut u64) -> Vec<GrainView>
         .collect()
 }
 
-/// A coupler of `scheme` on slab `f` with the cover map and the link plan of `views`
+/// The link cells of rule `R` on slab `f` with the cover map and the link plan of `views`
 /// (ids 0, 1, …), `fluid(k)` telling whether padded cell k is fluid.
-pub fn planned(
-    scheme: Scheme,
+pub fn planned_links<R: LinkRule>(
     f: SlabFrame,
     views: &[GrainView],
     fluid: &(impl Fn(usize) -> bool + Sync),
-) -> Coupler {
+) -> LinkCells<R> {
     let ids: Vec<u64> = (0..views.len() as u64).collect();
-    let mut c = Coupler::new(scheme, Refill::default(), f);
+    let mut c = LinkCells::<R>::new(Refill::default(), f);
     let (mut touched, mut inner) = (Vec::new(), Vec::new());
     cover(&f, views, fluid, &mut c.owner, &mut touched, &mut inner);
     c.lists.clear();
     c.lists.follow(&ids);
-    c.group_lists(fluid, views);
-    c.plan_links(views);
+    c.group_lists(&f, fluid, views);
+    c.plan_links(&f, views);
     c
+}
+
+/// [`planned_links`] in a coupler.
+pub fn planned<R: LinkRule>(
+    f: SlabFrame,
+    views: &[GrainView],
+    fluid: &(impl Fn(usize) -> bool + Sync),
+) -> Coupler {
+    let cells: Cells = R::wrap(planned_links::<R>(f, views, fluid));
+    Coupler {
+        common: Common::new(f),
+        cells,
+    }
 }
