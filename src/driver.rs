@@ -2,7 +2,7 @@
 //! ranks at the same cadence, and the header every `summary.json` starts with (the same
 //! keys for fluid, coupled, grain and MPM runs).
 
-use analysis::checks::CheckOutcome;
+use analysis::checks::{any_failed, mark_skipped, CheckOutcome};
 use analysis::Results;
 use decomposition::Comm;
 use serde::Serialize;
@@ -81,6 +81,21 @@ pub struct RunHeader {
     pub results: Results,
     /// Checks with their outcome.
     pub checks: Vec<CheckOutcome>,
+    /// Whether the command line cut the run short of the scene's own length (`--steps`,
+    /// `--end-time`): the checks are then reported, not judged.
+    pub shortened: bool,
+    /// The analyses that could not run, each with why.
+    pub analyses_skipped: Vec<SkippedAnalysis>,
+}
+
+/// An analysis that could not run, and why (for example an averaging window longer than
+/// a shortened run).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SkippedAnalysis {
+    /// The analysis (its `kind`).
+    pub analysis: String,
+    /// Why it could not run.
+    pub reason: String,
 }
 
 impl RunHeader {
@@ -113,7 +128,46 @@ impl RunHeader {
             checkpoints: Vec::new(),
             results: Results::new(),
             checks: Vec::new(),
+            shortened: false,
+            analyses_skipped: Vec::new(),
         }
+    }
+
+    /// Record the checks and the skipped analyses, and fail a run that otherwise ended
+    /// well when a judged check failed or, at the scene's full length, an analysis could
+    /// not run. On a `shortened` run every check is reported but not judged (the scene's
+    /// checks state what its full length achieves); elsewhere a check whose quantity a
+    /// skipped analysis would have measured is marked with that reason.
+    pub fn judge(
+        &mut self,
+        mut checks: Vec<CheckOutcome>,
+        skipped: &[analysis::AnalysisError],
+        shortened: bool,
+    ) {
+        if shortened {
+            mark_skipped(
+                &mut checks,
+                "not judged: --steps or --end-time cut the run short of the scene's length",
+                true,
+            );
+        } else if !skipped.is_empty() {
+            let names: Vec<&str> = skipped.iter().map(|e| e.analysis.as_str()).collect();
+            let why = format!("not measured: analysis {} could not run", names.join(", "));
+            mark_skipped(&mut checks, &why, false);
+        }
+        let failed = any_failed(&checks) || (!shortened && !skipped.is_empty());
+        if self.status == Status::Ok && failed {
+            self.status = Status::ChecksFailed;
+        }
+        self.checks = checks;
+        self.shortened = shortened;
+        self.analyses_skipped = skipped
+            .iter()
+            .map(|e| SkippedAnalysis {
+                analysis: e.analysis.clone(),
+                reason: e.message.clone(),
+            })
+            .collect();
     }
 
     /// Fill in the stage timings from each rank's `clocks` (the solver's and the time

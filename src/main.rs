@@ -405,6 +405,13 @@ fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
         println!("  {k} = {v:.6e}");
     }
     print_checks(&run.checks);
+    for a in &run.analyses_skipped {
+        let level = if run.shortened { "warning" } else { "error" };
+        eprintln!("{level}: analysis `{}` skipped: {}", a.analysis, a.reason);
+    }
+    if run.shortened && !run.checks.is_empty() {
+        eprintln!("note: --steps or --end-time cut the run short of the scene's length: its checks are reported, not judged");
+    }
     let pictures = if out.join("pictures").is_dir() {
         ", pictures/"
     } else {
@@ -419,6 +426,9 @@ fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
     }
     match run.status {
         Status::Ok => {}
+        Status::ChecksFailed if !run.analyses_skipped.is_empty() => {
+            eprintln!("error: an analysis the scene asks for could not run")
+        }
         Status::ChecksFailed => eprintln!("error: at least one check failed"),
         Status::Unstable => eprintln!(
             "the output written so far is kept in {}, including the last good state",
@@ -433,12 +443,22 @@ fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
     exit_code(run.status)
 }
 
-/// One line per check: PASS/FAIL, the quantity, its value and the bounds.
+/// One line per check: PASS/FAIL (or SKIP, not judged, with what it would give), the
+/// quantity, its value and the bounds.
 fn print_checks(checks: &[grainflow::analysis::checks::CheckOutcome]) {
     for c in checks {
+        let would = match (&c.skipped, c.value, c.passed) {
+            (Some(_), Some(_), true) => " (would pass)",
+            (Some(_), Some(_), false) => " (would fail)",
+            _ => "",
+        };
         println!(
-            "  check {}: {} = {} -> {}",
-            if c.passed { "PASS" } else { "FAIL" },
+            "  check {}: {} = {} -> {}{would}",
+            match (&c.skipped, c.passed) {
+                (Some(_), _) => "SKIP",
+                (None, true) => "PASS",
+                (None, false) => "FAIL",
+            },
             c.quantity,
             c.value
                 .map(|v| format!("{v:.6e}"))

@@ -401,7 +401,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
     );
     let output = &scene.scene.output;
     let next = resume.map(|s| crate::time_loop::next_output_after(scene.units.time_si(s), output));
-    let plan = LoopPlan::new(n, output, &opts.out_dir, next);
+    let plan =
+        LoopPlan::new(n, output, &opts.out_dir, next).scene_length(step_count(scene, None, None));
     let end = drive(&mut stepper, &plan, &mut progress, comm)?;
     summarise(
         scene,
@@ -420,7 +421,7 @@ fn analyse<T: Real + hdf5::H5Type>(
     fields: Fields,
     totals_final: Totals,
     comm: &dyn Comm,
-) -> Result<Results, RunError> {
+) -> Result<(Results, Vec<analysis::AnalysisError>), RunError> {
     let scene = st.scene;
     let momentum_final = momenta(&mut st.sim, scene, comm);
     let sim = &st.sim;
@@ -429,7 +430,7 @@ fn analyse<T: Real + hdf5::H5Type>(
         None => Vec::new(),
     };
     let grains_final = sim.grains.as_ref().map(|c| c.positions(comm));
-    let mut results = if !scene.scene.analyses.is_empty() {
+    let (mut results, skipped) = if !scene.scene.analyses.is_empty() {
         // Only rank 0 holds the whole lattice (and only when an analysis reads it).
         let global = analysis::needs_fields(scene)
             .then(|| sim.gather_fields_at_root(comm, fields))
@@ -447,10 +448,13 @@ fn analyse<T: Real + hdf5::H5Type>(
                 grain_radius: grain_radius.clone(),
                 grains: grains_final.map(|f| (st.grains_initial.clone(), f)),
             };
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| analysis::run_all(&inputs)))
-                .unwrap_or_else(|_| Err(analysis::panicked()))
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                Ok(analysis::run_all(&inputs))
+            }))
+            .unwrap_or_else(|_| Err(analysis::panicked()))
         });
-        analysis::share_from_root(comm, local)?
+        let outcome = analysis::share_from_root(comm, local)?;
+        (outcome.results, outcome.skipped)
     } else {
         let mut r = Results::new();
         r.insert("run.mass".into(), totals_final.mass);
@@ -458,13 +462,13 @@ fn analyse<T: Real + hdf5::H5Type>(
             "run.max_speed_m_s".into(),
             scene.units.velocity_to_si(totals_final.max_speed),
         );
-        r
+        (r, Vec::new())
     };
     if let Some(c) = &sim.grains {
         results.insert("coupling.substeps".into(), c.substeps() as f64);
         results.insert("coupling.grains".into(), grain_radius.len() as f64);
     }
-    Ok(results)
+    Ok((results, skipped))
 }
 
 /// The last sample of every probe series (SI).
@@ -524,7 +528,7 @@ fn summarise<T: Real + hdf5::H5Type>(
         _ => st.sim.fields(comm),
     };
     let totals_final = st.sim.totals(comm, &fields);
-    let results = if end.status == Status::Ok {
+    let (results, skipped) = if end.status == Status::Ok {
         analyse(&mut st, fields, totals_final, comm)?
     } else {
         let mut r = Results::new();
@@ -532,13 +536,9 @@ fn summarise<T: Real + hdf5::H5Type>(
             r.insert("coupling.substeps".into(), c.substeps() as f64);
             r.insert("coupling.grains".into(), c.radii(comm).len() as f64);
         }
-        r
+        (r, Vec::new())
     };
     let checks = evaluate(&scene.scene.checks, &results);
-    let status = match end.status {
-        Status::Ok if !checks.iter().all(|c| c.passed) => Status::ChecksFailed,
-        other => other,
-    };
     let sim = &st.sim;
     let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
     let updates = (nx * ny) as f64 * (steps - end.start_step) as f64;
@@ -558,7 +558,7 @@ fn summarise<T: Real + hdf5::H5Type>(
         scene.warnings.clone(),
         comm,
     );
-    header.status = status;
+    header.status = end.status;
     header.error = end.error.clone();
     header.restarted_from_step = end.start_step;
     header.steps = steps;
@@ -569,7 +569,7 @@ fn summarise<T: Real + hdf5::H5Type>(
     let kernel_s = header.stage_seconds[STAGES[stage::COLLIDE_STREAM]];
     header.checkpoints = end.checkpoints.clone();
     header.results = results;
-    header.checks = checks;
+    header.judge(checks, &skipped, end.shortened);
     let summary = Summary {
         run: header,
         scene: scene.scene.clone(),

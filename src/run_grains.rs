@@ -4,7 +4,7 @@
 
 use crate::driver::{RunHeader, StageClock};
 use crate::progress::Progress;
-use crate::run::{RunError, RunOptions, Status};
+use crate::run::{RunError, RunOptions};
 use crate::time_loop::{drive, particle_last_step, Due, Flow, LoopEnd, LoopPlan, Stepper};
 use analysis::checks::evaluate;
 use analysis::collapse::{collapse_results, pile_shape, QUANTITIES};
@@ -235,7 +235,12 @@ pub fn run_grains(
         &s.output,
         &opts.out_dir,
         resume.as_ref().map(|r| r.next_output_s),
-    );
+    )
+    .scene_length(particle_last_step(
+        (None, None),
+        (s.run.steps, s.run.end_time_s),
+        dt,
+    ));
     let collapse_at = s
         .analyses
         .iter()
@@ -349,10 +354,6 @@ fn summarise(
     let s = &scene.scene;
     let results = collapse_analysis(&st, &end, g_abs, comm);
     let checks = evaluate(&s.checks, &results);
-    let mut status = end.status;
-    if status == Status::Ok && checks.iter().any(|c| !c.passed) {
-        status = Status::ChecksFailed;
-    }
     let d = &st.d;
     let (ke, momentum, _) = global_state(d, comm);
     let mut counts = [
@@ -369,7 +370,7 @@ fn summarise(
         scene.warnings.clone(),
         comm,
     );
-    header.status = status;
+    header.status = end.status;
     header.error = end.error.clone();
     header.restarted_from_step = end.start_step;
     header.steps = d.system.steps;
@@ -378,7 +379,7 @@ fn summarise(
     header.set_stages(&[&st.clock, &end.clock], comm);
     header.checkpoints = end.checkpoints.clone();
     header.results = results;
-    header.checks = checks;
+    header.judge(checks, &[], end.shortened);
     let steps = (d.system.steps - end.start_step) as f64;
     let summary = GrainSummary {
         run: header,

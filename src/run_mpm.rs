@@ -310,7 +310,12 @@ pub fn run_mpm(
         &s.output,
         &opts.out_dir,
         resume.map(|r| r.next_output_s),
-    );
+    )
+    .scene_length(particle_last_step(
+        (None, None),
+        (s.run.steps, s.run.end_time_s),
+        dt,
+    ));
     let mut stepper = MpmStepper {
         scene,
         out_dir: opts.out_dir.clone(),
@@ -366,16 +371,13 @@ fn summarise(
     out_dir: &Path,
 ) -> Result<MpmSummary, RunError> {
     let s = &scene.scene;
-    let mut status = end.status;
+    let status = end.status;
     let results = if status == Status::Ok {
         collapse_analysis(&st, &end, comm)
     } else {
         Results::new()
     };
     let checks = evaluate(&s.checks, &results);
-    if status == Status::Ok && checks.iter().any(|c| !c.passed) {
-        status = Status::ChecksFailed;
-    }
     let end_totals = if status == Status::Unstable {
         start_totals
     } else {
@@ -402,7 +404,7 @@ fn summarise(
     header.set_stages(&[&solver, &st.clock, &end.clock], comm);
     header.checkpoints = end.checkpoints.clone();
     header.results = results;
-    header.checks = checks;
+    header.judge(checks, &[], end.shortened);
     let spec = scene.setup.spec;
     let steps = (sys.steps - end.start_step) as f64;
     let summary = MpmSummary {

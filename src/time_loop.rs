@@ -78,6 +78,9 @@ pub struct LoopPlan {
     pub checkpoint_path: PathBuf,
     /// Whether this run starts from a checkpoint (no snapshot at its first step).
     pub restarted: bool,
+    /// Whether the command line (`--steps`, `--end-time`) stops the run before the scene's
+    /// own length: its checks are then reported, not judged.
+    pub shortened: bool,
 }
 
 impl LoopPlan {
@@ -103,7 +106,15 @@ impl LoopPlan {
             checkpoint_at_end: output.checkpoint_at_end(),
             checkpoint_path: out_dir.join("checkpoint.h5"),
             restarted: resume_next_output_s.is_some(),
+            shortened: false,
         }
+    }
+
+    /// The plan, stopping before the scene's own last step `scene_last_step` when
+    /// `last_step` is smaller.
+    pub fn scene_length(mut self, scene_last_step: u64) -> Self {
+        self.shortened = self.last_step < scene_last_step;
+        self
     }
 }
 
@@ -126,6 +137,8 @@ pub struct LoopEnd {
     pub clock: StageClock,
     /// The next snapshot time of a time cadence (s), as a checkpoint stores it.
     pub next_output_s: f64,
+    /// The plan's [`LoopPlan::shortened`].
+    pub shortened: bool,
 }
 
 /// The stages the loop times itself; each solver times its own.
@@ -161,6 +174,7 @@ pub fn drive(
         checkpoints: Vec::new(),
         clock: StageClock::new(&LOOP_STAGES),
         next_output_s: plan.next_output_s,
+        shortened: plan.shortened,
     };
     let mut checkpoint_at = None;
     let mut last_checkpoint = Instant::now();

@@ -261,3 +261,13 @@ fn check_and_info_commands() {
         .unwrap();
     assert!(String::from_utf8_lossy(&o.stdout).contains("threads:"));
 }
+
+#[test]
+fn strouhal_transient_longer_than_the_run_is_rejected() {
+    let scene = format!(
+        "{GOOD}\n[[probes]]\nkind = \"point\"\nname = \"p\"\nposition_m = [0.05, 0.04]\n\n\
+         [[analyses]]\nkind = \"strouhal\"\nprobe = \"p\"\nvelocity_m_s = 0.01\n\
+         length_m = 0.08\nskip_s = 1.0e6\n"
+    );
+    expect_error(&scene, &["skip_s", "lengthen the run"]);
+}

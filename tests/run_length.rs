@@ -130,3 +130,76 @@ fn every_kind_of_run_writes_the_same_summary_header() {
             .is_some_and(|m| !m.is_empty()));
     }
 }
+
+/// A run cut short by `--steps` writes its summary and exits 0: the analyses that cannot
+/// run on so short a series are skipped with the reason, and the scene's checks are
+/// reported but not judged. The same scene at its own (here short) length fails with
+/// exit 2 and names the analysis that could not run.
+#[test]
+fn shortened_runs_skip_what_they_cannot_measure() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("short");
+    let o = grainflow(
+        1,
+        &[
+            "run",
+            "jobs/karman/re112.toml",
+            "--out",
+            out.to_str().unwrap(),
+            "--steps",
+            "40",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "a shortened run exits 0");
+    let s = summary(&out);
+    assert_eq!(s["status"], "ok");
+    assert_eq!(s["shortened"], true);
+    let skipped = s["analyses_skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 2, "{skipped:?}");
+    assert!(skipped[0]["analysis"]
+        .as_str()
+        .unwrap()
+        .starts_with("strouhal of probe `wake"));
+    assert!(skipped[0]["reason"].as_str().unwrap().contains("skip_s"));
+    let checks = s["checks"].as_array().unwrap();
+    assert!(!checks.is_empty());
+    assert!(
+        checks.iter().all(|c| c["skipped"].is_string()),
+        "{checks:?}"
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("warning: analysis `strouhal of probe `wake`"),
+        "{stderr}"
+    );
+
+    // At the scene's own length, an analysis that cannot run fails the run (exit 2): here
+    // a Strouhal analysis left with too few samples after its transient.
+    let end = s["simulated_time_s"].as_f64().unwrap();
+    let text = std::fs::read_to_string(common::root().join("jobs/karman/re112.toml"))
+        .unwrap()
+        .replace("end_time_s = 600.0", "steps = 40")
+        .replace("skip_s = 300.0", &format!("skip_s = {}", 0.9 * end));
+    assert!(text.contains(&format!("skip_s = {}", 0.9 * end)));
+    let scene = dir.path().join("short_re112.toml");
+    std::fs::write(&scene, text).unwrap();
+    let full = dir.path().join("full");
+    let o = grainflow(
+        1,
+        &[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            full.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let s = summary(&full);
+    assert_eq!(s["status"], "checks-failed");
+    assert_eq!(s["shortened"], false);
+    assert_eq!(s["analyses_skipped"].as_array().unwrap().len(), 2);
+    let checks = s["checks"].as_array().unwrap();
+    assert!(checks
+        .iter()
+        .all(|c| c["skipped"].as_str().unwrap().contains("could not run")));
+}

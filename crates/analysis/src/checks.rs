@@ -23,6 +23,26 @@ pub struct CheckOutcome {
     pub max: Option<f64>,
     /// Whether it passed.
     pub passed: bool,
+    /// Why it was not judged (a shortened run, or an analysis that could not run); such a
+    /// check does not fail the run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skipped: Option<String>,
+}
+
+/// Mark checks as not judged, with `why`: every one with `every` (a run cut short by the
+/// command line, where the scene's checks do not apply), else those whose quantity was not
+/// measured.
+pub fn mark_skipped(outcomes: &mut [CheckOutcome], why: &str, every: bool) {
+    for c in outcomes.iter_mut() {
+        if every || c.value.is_none() {
+            c.skipped = Some(why.to_string());
+        }
+    }
+}
+
+/// Whether a check failed the run: one that failed and was judged.
+pub fn any_failed(outcomes: &[CheckOutcome]) -> bool {
+    outcomes.iter().any(|c| !c.passed && c.skipped.is_none())
 }
 
 /// Evaluate every check against the results.
@@ -53,6 +73,7 @@ pub fn evaluate(checks: &[Check], results: &Results) -> Vec<CheckOutcome> {
                 min: c.min,
                 max: c.max,
                 passed,
+                skipped: None,
             }
         })
         .collect()

@@ -154,8 +154,19 @@ pub fn needs_fields(scene: &ValidScene) -> bool {
     })
 }
 
-/// Run every analysis of the scene.
-pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
+/// What the analyses of a run gave: their results, and the analyses that could not run
+/// (a series too short for the averaging window, say), each with the reason.
+#[derive(Debug, Clone, Default)]
+pub struct Outcome {
+    /// Named results.
+    pub results: Results,
+    /// The analyses that were skipped, with why.
+    pub skipped: Vec<AnalysisError>,
+}
+
+/// Run every analysis of the scene. An analysis that cannot run is skipped with its
+/// reason ([`Outcome::skipped`]) and the others still run.
+pub fn run_all(inp: &Inputs) -> Outcome {
     let mut r = Results::new();
     let u = &inp.scene.units;
     r.insert("run.mass".into(), inp.totals.1.mass);
@@ -163,16 +174,38 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
         "run.max_speed_m_s".into(),
         u.velocity_to_si(inp.totals.1.max_speed),
     );
+    let mut skipped = Vec::new();
     for a in &inp.scene.scene.analyses {
+        if let Err(mut e) = run_one(inp, a, &mut r) {
+            // Name the probe where two analyses of one kind may differ only in it.
+            if let Analysis::ForceCoefficients { probe, .. }
+            | Analysis::Strouhal { probe, .. }
+            | Analysis::Settling { probe, .. } = a
+            {
+                e.analysis = format!("{} of probe `{probe}`", e.analysis);
+            }
+            skipped.push(e);
+        }
+    }
+    Outcome {
+        results: r,
+        skipped,
+    }
+}
+
+/// Analysis `a`, its results into `r`.
+fn run_one(inp: &Inputs, a: &Analysis, r: &mut Results) -> Result<(), AnalysisError> {
+    let r = &mut *r;
+    {
         match a {
-            Analysis::Poiseuille => flows::poiseuille(inp, &mut r)?,
-            Analysis::Couette => flows::couette(inp, &mut r)?,
-            Analysis::TaylorGreen => flows::taylor_green(inp, &mut r)?,
+            Analysis::Poiseuille => flows::poiseuille(inp, r)?,
+            Analysis::Couette => flows::couette(inp, r)?,
+            Analysis::TaylorGreen => flows::taylor_green(inp, r)?,
             Analysis::Ghia {
                 u_reference,
                 v_reference,
                 column,
-            } => flows::ghia(inp, u_reference, v_reference, column, &mut r)?,
+            } => flows::ghia(inp, u_reference, v_reference, column, r)?,
             Analysis::ForceCoefficients {
                 probe,
                 velocity_m_s,
@@ -184,7 +217,7 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
                 *velocity_m_s,
                 *length_m,
                 *average_last_s,
-                &mut r,
+                r,
             )?,
             Analysis::Strouhal {
                 probe,
@@ -192,15 +225,7 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
                 velocity_m_s,
                 length_m,
                 skip_s,
-            } => signals::strouhal(
-                inp,
-                probe,
-                *signal,
-                *velocity_m_s,
-                *length_m,
-                *skip_s,
-                &mut r,
-            )?,
+            } => signals::strouhal(inp, probe, *signal, *velocity_m_s, *length_m, *skip_s, r)?,
             Analysis::MassDrift => {
                 let (a, b) = (inp.totals.0.mass, inp.totals.1.mass);
                 r.insert("mass.relative_drift".into(), (b - a) / a);
@@ -208,7 +233,7 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
             Analysis::Settling {
                 probe,
                 average_last_s,
-            } => sedimentation::settling(inp, probe, *average_last_s, &mut r)?,
+            } => sedimentation::settling(inp, probe, *average_last_s, r)?,
             Analysis::DraftKissTumble {
                 lower,
                 upper,
@@ -226,7 +251,7 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
                     fall_window_s: *fall_window_s,
                     terminal_velocity_m_s: *terminal_velocity_m_s,
                 },
-                &mut r,
+                r,
             )?,
             Analysis::ColumnCollapse {
                 wall_x_m,
@@ -238,7 +263,7 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
                 (*wall_x_m, *floor_y_m),
                 deposit,
                 pore_pressure.as_deref(),
-                &mut r,
+                r,
             )?,
             Analysis::MomentumBalance => {
                 let Some((p0, p1)) = inp.momentum else {
@@ -264,7 +289,7 @@ pub fn run_all(inp: &Inputs) -> Result<Results, AnalysisError> {
             }
         }
     }
-    Ok(r)
+    Ok(())
 }
 
 /// The error an analysis that panicked becomes (the panic's message went to stderr), so that

@@ -25,8 +25,11 @@ fn probe_radius(inp: &Inputs, probe: &str, analysis: &str) -> Result<f64, Analys
 }
 
 /// Terminal settling of a grain from its probe (columns x, y, vx, vy, …), averaged over the
-/// last `window_s`: speed U, Re = U d / ν and C_D = 2 W / (ρ U² d) with W = (ρ_s − ρ) |g| π r²
-/// the submerged weight per metre of depth (2-D disk: U_t = √(π g d (ρ_s/ρ − 1) / (2 C_D))).
+/// last `window_s`: the fall speed U (the velocity's component along gravity, so that a
+/// sideways zig-zag does not count), Re = U d / ν and C_D = 2 W / (ρ U² d) with
+/// W = (ρ_s − ρ) |g| π r² the submerged weight per metre of depth (2-D disk:
+/// U_t = √(π g d (ρ_s/ρ − 1) / (2 C_D))), and the root-mean-square lateral velocity. An error
+/// when the window is longer than the recorded series.
 pub fn settling(
     inp: &Inputs,
     probe: &str,
@@ -46,27 +49,42 @@ pub fn settling(
         .find(|(i, _)| i == id)
         .map(|(_, r)| *r)
         .ok_or_else(|| err("settling", format!("no grain with id {id}")))?;
-    let t_end = *s.times.last().expect("non-empty");
-    let speed = |i: usize| {
+    let (t_first, t_end) = (s.times[0], *s.times.last().expect("non-empty"));
+    if t_end - t_first < window_s {
+        return Err(err(
+            "settling",
+            format!(
+                "the averaging window (average_last_s = {window_s} s) is longer than the \
+                 recorded run ({:.4e} s): run longer or shorten the window",
+                t_end - t_first
+            ),
+        ));
+    }
+    let gn = g.gravity_m_s2[0].hypot(g.gravity_m_s2[1]);
+    if gn == 0.0 {
+        return Err(err("settling", "needs gravity (the fall direction)"));
+    }
+    let down = [g.gravity_m_s2[0] / gn, g.gravity_m_s2[1] / gn];
+    // The velocity along gravity and across it.
+    let parts = |i: usize| {
         let row = &s.values[i * s.columns.len()..(i + 1) * s.columns.len()];
-        row[2].hypot(row[3])
+        let (vx, vy) = (row[2], row[3]);
+        (vx * down[0] + vy * down[1], vy * down[0] - vx * down[1])
     };
-    let mean = |from: f64, to: f64| {
+    let mean = |from: f64, to: f64, f: &dyn Fn(usize) -> f64| {
         let rows: Vec<usize> = (0..s.len())
             .filter(|&i| s.times[i] >= from && s.times[i] <= to)
             .collect();
-        rows.iter().map(|&i| speed(i)).sum::<f64>() / rows.len().max(1) as f64
+        rows.iter().map(|&i| f(i)).sum::<f64>() / rows.len().max(1) as f64
     };
-    let u = mean(t_end - window_s, t_end);
-    let first = mean(t_end - window_s, t_end - 0.5 * window_s);
-    let second = mean(t_end - 0.5 * window_s, t_end);
+    let fall = |i: usize| parts(i).0;
+    let u = mean(t_end - window_s, t_end, &fall);
+    let first = mean(t_end - window_s, t_end - 0.5 * window_s, &fall);
+    let second = mean(t_end - 0.5 * window_s, t_end, &fall);
+    let lateral = mean(t_end - window_s, t_end, &|i| parts(i).1.powi(2)).sqrt();
     let rho = sc.fluid.density_kg_m3;
     let d = 2.0 * radius;
-    let w = (g.density_kg_m3 - rho)
-        * g.gravity_m_s2[0].hypot(g.gravity_m_s2[1])
-        * std::f64::consts::PI
-        * radius
-        * radius;
+    let w = (g.density_kg_m3 - rho) * gn * std::f64::consts::PI * radius * radius;
     r.insert(format!("{probe}.settling_velocity_m_s"), u);
     r.insert(format!("{probe}.reynolds"), u * d / sc.fluid.viscosity_m2_s);
     r.insert(
@@ -74,6 +92,7 @@ pub fn settling(
         2.0 * w / (rho * u * u * d),
     );
     r.insert(format!("{probe}.velocity_drift"), (second - first) / second);
+    r.insert(format!("{probe}.lateral_velocity_m_s"), lateral);
     Ok(())
 }
 

@@ -85,6 +85,7 @@ pub(super) fn validate_probes_and_analyses(
                 probe,
                 velocity_m_s,
                 length_m,
+                skip_s,
                 ..
             } => {
                 if !matches!(probe_kind(probe), Some(Probe::Point { .. })) {
@@ -96,6 +97,16 @@ pub(super) fn validate_probes_and_analyses(
                 }
                 positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
                 positive(ctx, "length_m", *length_m, "the reference length")?;
+                if *skip_s >= run_end_s {
+                    return Err(ctx.err(
+                        "skip_s",
+                        0,
+                        format!(
+                            "strouhal skips {skip_s} s of transient, but the run ends at \
+                             {run_end_s} s: shorten skip_s or lengthen the run"
+                        ),
+                    ));
+                }
             }
             Analysis::Settling {
                 probe,
