@@ -13,7 +13,10 @@ pub fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
     let any = scene::load_any(scene)?;
     let cost = match &any {
         scene::AnyScene::Fluid(s) => {
-            print_check(s);
+            if !print_check(s) {
+                println!("  refused: the coupled run is likely unstable (see above)");
+                return Ok(2);
+            }
             let one = s.scene.run.backend == grainflow::scene::Backend::Cpu
                 && grainflow::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
             let bytes = match s.scene.run.precision {
@@ -115,8 +118,9 @@ fn dem_verdict(lambda: f64) -> String {
     }
 }
 
-/// What `check` prints about a fluid (or coupled) scene.
-fn print_check(s: &scene::ValidScene) {
+/// What `check` prints about a fluid (or coupled) scene; false when the coupled stability
+/// map says the run is likely unstable.
+fn print_check(s: &scene::ValidScene) -> bool {
     let u = &s.units;
     let [nx, ny] = s.scene.domain.cells;
     println!(
@@ -166,6 +170,7 @@ fn print_check(s: &scene::ValidScene) {
         buffers,
         if one { ", in place" } else { "s" }
     );
+    let mut stable = true;
     match grainflow::coupled::plan(s) {
         Ok(Some(p)) => {
             println!(
@@ -187,6 +192,20 @@ fn print_check(s: &scene::ValidScene) {
                     .unwrap_or_else(|| "packed at run time".into())
             );
             println!("  DEM stability    {}", dem_verdict(p.dem_lambda));
+            if let Some(g) = &s.scene.grains {
+                use grainflow::stability::coupled;
+                let case = coupled::CoupledCase {
+                    scheme: p.scheme.name().to_string(),
+                    cells_per_diameter: a,
+                    density_ratio: g.density_kg_m3 / s.scene.fluid.density_kg_m3,
+                    tau: u.tau,
+                    lattice_velocity: u.u_lattice,
+                };
+                let map = coupled::parse(coupled::COUPLED_CSV);
+                let v = coupled::verdict(&map, &case);
+                println!("  coupled stability {}", v.describe(&case));
+                stable = !matches!(v, coupled::CoupledVerdict::Unstable(_));
+            }
         }
         Ok(None) => {}
         Err(e) => println!("  coupling: {e}"),
@@ -194,4 +213,5 @@ fn print_check(s: &scene::ValidScene) {
     for w in &s.warnings {
         println!("  warning: {w}");
     }
+    stable
 }

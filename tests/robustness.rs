@@ -79,3 +79,33 @@ fn fine_psm_disk_settles_without_blowing_up() {
         );
     }
 }
+
+/// A CI-sized subset of the robustness sweep (`jobs/robustness/sweep.py`): every scheme at 8
+/// cells per diameter, the lightest and the heaviest grain, Re_t = 100 and 500. Each run
+/// finishes, or `check` refuses it as likely unstable; the script exits 1 when a run blows
+/// up after `check` passed it.
+#[test]
+fn sweep_subset_finishes_or_is_refused() {
+    let out = tempfile::tempdir().unwrap();
+    let o = std::process::Command::new("python3")
+        .arg(root().join("jobs/robustness/sweep.py"))
+        .args(["--out", out.path().to_str().unwrap()])
+        .args(["--bin", env!("CARGO_BIN_EXE_grainflow")])
+        .args(["--threads", "1", "--cells", "8", "--ratios", "1.01,8"])
+        .args(["--re", "100,500"])
+        .output()
+        .expect("python3 runs");
+    let text = String::from_utf8_lossy(&o.stdout);
+    println!("{text}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "a run blew up after check passed it");
+    let rows = std::fs::read_to_string(out.path().join("results.csv")).unwrap();
+    let count = |what: &str| rows.lines().filter(|l| l.contains(what)).count();
+    assert_eq!(count(",finished,") + count(",refused,"), 12, "{rows}");
+    // The measured failures of bounce-back and interpolated bounce-back at this resolution
+    // are refused, and PSM runs every case.
+    assert!(count(",refused,") >= 3, "{rows}");
+    assert!(rows
+        .lines()
+        .filter(|l| l.starts_with("psm,"))
+        .all(|l| l.contains(",finished,")));
+}

@@ -26,7 +26,9 @@ Usage:
                            [--threads 2] [--cells 8,16,32,64] [--ratios 1.01,1.5,2.5,8]
                            [--re 1,10,100,500] [--schemes bounce-back,interpolated,psm]
                            [--dry-run]
-Writes OUT/results.csv and OUT/results.md (the table docs/validation.md quotes).
+Writes OUT/results.csv and OUT/results.md (the table docs/validation.md quotes). A copy of
+results.csv in jobs/robustness/ is the coupled stability map `grainflow check` judges coupled
+scenes by (crates/stability/src/coupled.rs).
 """
 
 import argparse
@@ -113,7 +115,7 @@ def fall_speed(probe_csv):
 
 def first_error(text):
     for line in text.splitlines():
-        if line.startswith("error"):
+        if line.startswith("error") or "likely unstable" in line:
             return line.strip()
     lines = [l for l in text.splitlines() if l.strip()]
     return lines[-1].strip() if lines else ""
@@ -126,8 +128,10 @@ def run_case(args, scheme, cells, ratio, re):
     path = os.path.join(folder, "scene.toml")
     with open(path, "w") as f:
         f.write(scene_text(scheme, cells, ratio, re, args.lattice_velocity))
-    row = {"scheme": scheme, "cells": cells, "ratio": ratio, "re": re,
-           "outcome": "", "reason": "", "fall_speed_m_s": "", "error": "", "seconds": ""}
+    tau = 0.5 + 3.0 * args.lattice_velocity * cells / re
+    row = {"scheme": scheme, "cells": cells, "ratio": ratio, "re": re, "tau": f"{tau:.6f}",
+           "lattice_velocity": args.lattice_velocity, "outcome": "", "reason": "",
+           "fall_speed_m_s": "", "error": "", "seconds": ""}
     check = subprocess.run([args.bin, "check", path], capture_output=True, text=True)
     verdict = [l for l in check.stdout.splitlines() if l.strip().startswith("stability")]
     row["check"] = verdict[0].split(None, 1)[1] if verdict else ""
@@ -177,6 +181,16 @@ def write_table(rows, path):
                     f"{r['check']} | {r['reason']} |\n")
 
 
+def write_map(rows, path):
+    """The coupled stability map: one line per case that ran (refused ones say nothing)."""
+    with open(path, "w") as f:
+        f.write("scheme,cells_per_diameter,density_ratio,tau,lattice_velocity,stable\n")
+        for r in rows:
+            if r["outcome"] in ("finished", "unstable"):
+                f.write(f"{r['scheme']},{r['cells']},{r['ratio']},{r['tau']},"
+                        f"{r['lattice_velocity']},{int(r['outcome'] == 'finished')}\n")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", required=True, help="folder for scenes and results")
@@ -209,13 +223,14 @@ def main():
               f"Re={row['re']:<6} {row['outcome']:<9} {row['fall_speed_m_s']:>13} "
               f"{row['seconds']:>6}s {row['reason'][:100]}", flush=True)
     add_errors(rows)
-    fields = ["scheme", "cells", "ratio", "re", "outcome", "fall_speed_m_s", "error", "check",
-              "reason", "seconds"]
+    fields = ["scheme", "cells", "ratio", "re", "tau", "lattice_velocity", "outcome",
+              "fall_speed_m_s", "error", "check", "reason", "seconds"]
     with open(os.path.join(args.out, "results.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
     write_table(rows, os.path.join(args.out, "results.md"))
+    write_map(rows, os.path.join(args.out, "coupled-map.csv"))
     bad = [r for r in rows if r["outcome"] not in ("finished", "refused", "checked")]
     print(f"{len(bad)} of {len(rows)} runs blew up or failed after check passed them")
     sys.exit(1 if bad else 0)

@@ -3,6 +3,7 @@
 //! over relaxation time, lattice Mach number and operator ([`lbm`], [`map`]), the DEM's
 //! time-step factor λ ([`dem`]) and the MPM's Courant number ([`mpm`]).
 
+pub mod coupled;
 pub mod dem;
 pub mod lbm;
 pub mod map;
