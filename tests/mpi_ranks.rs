@@ -314,8 +314,9 @@ fn field_analysis_on_3_ranks_equals_1_rank() {
     assert_eq!(a["checks"], b["checks"]);
 }
 
-/// An analysis that fails on rank 0 fails the run on every rank with rank 0's message (no
-/// rank waits for results that never come).
+/// An analysis that cannot run on rank 0 is skipped on every rank with rank 0's reason (no
+/// rank waits for results that never come), and at the scene's own length that fails the
+/// run (exit 2, "checks-failed").
 #[test]
 fn failing_analysis_on_2_ranks_stops_every_rank_with_its_message() {
     let d = tempfile::tempdir().unwrap();
@@ -339,12 +340,18 @@ fn failing_analysis_on_2_ranks_stops_every_rank_with_its_message() {
             out.to_str().unwrap(),
         ],
     );
-    assert!(!o.status.success());
+    assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(
-        err.matches("error: analysis `couette`: needs walls")
-            .count(),
-        2,
-        "both ranks report rank 0's error: {err}"
+    assert!(
+        err.contains("error: analysis `couette` skipped: needs walls"),
+        "{err}"
     );
+    let s = summary(&out);
+    assert_eq!(s["status"], "checks-failed");
+    assert_eq!(s["ranks"], 2);
+    assert_eq!(s["analyses_skipped"][0]["analysis"], "couette");
+    assert!(s["analyses_skipped"][0]["reason"]
+        .as_str()
+        .unwrap()
+        .starts_with("needs walls"));
 }

@@ -24,5 +24,5 @@ pub use comm::{ordered_sum, Comm, Incoming, Outgoing, SingleProcess};
 pub use halo::{Side, SlabHalo};
 pub use mpi_comm::{launched_by_mpi, MpiComm, RawComm};
 pub use neighbours::{swap_neighbours, swap_neighbours_varlen};
-pub use pack::{pack_rows, unpack_rows, PackRows, Record};
+pub use pack::{pack_rows, pack_words, unpack_rows, unpack_words, PackRows, Record, Word};
 pub use slab::{PartitionError, Slab, SlabPartition};

@@ -1,7 +1,12 @@
-//! What travels between ranks (ghosts, migration, checkpoint rows): flat messages of f64
-//! words, a fixed number per row, ids and other integers as their exact bit patterns.
-//! A structure-of-arrays store implements [`PackRows`]; a plain record implements
-//! [`Record`], and a `Vec` of records is then a store.
+//! What travels between ranks. Two forms, one module:
+//! - **Rows** (ghost grains, migrating grains and material points, checkpoint rows): flat
+//!   messages of f64 words, a fixed number per row, ids and other integers as their exact
+//!   bit patterns. A structure-of-arrays store implements [`PackRows`]; a plain record
+//!   implements [`Record`], and a `Vec` of records is then a store.
+//! - **Faces** (the lattice's halo columns, every step): values in the precision they are
+//!   stored in ([`Word`]: f32 or f64), packed straight into a halo's byte buffer with
+//!   [`pack_words`] and read back with [`unpack_words`], so an f32 lattice sends 4 bytes a
+//!   value, not 8.
 
 /// A store whose rows travel between ranks as [`PackRows::WORDS`] f64 words each.
 pub trait PackRows {
@@ -32,6 +37,52 @@ impl<R: Record> PackRows for Vec<R> {
     fn push_row(&mut self, words: &[f64]) {
         self.push(R::unpack(words));
     }
+}
+
+/// A value that travels as its little-endian bytes: f32 or f64.
+pub trait Word: Copy {
+    /// Bytes per value.
+    const BYTES: usize;
+    /// Write the little-endian bytes of `self` into `out[..BYTES]`.
+    fn put_le(self, out: &mut [u8]);
+    /// Read a value from the little-endian bytes `b[..BYTES]`.
+    fn get_le(b: &[u8]) -> Self;
+}
+
+macro_rules! impl_word {
+    ($t:ty) => {
+        impl Word for $t {
+            const BYTES: usize = std::mem::size_of::<$t>();
+            #[inline(always)]
+            fn put_le(self, out: &mut [u8]) {
+                out[..Self::BYTES].copy_from_slice(&self.to_le_bytes());
+            }
+            #[inline(always)]
+            fn get_le(b: &[u8]) -> Self {
+                <$t>::from_le_bytes(b[..Self::BYTES].try_into().expect("BYTES long"))
+            }
+        }
+    };
+}
+impl_word!(f32);
+impl_word!(f64);
+
+/// Write `values` one after another into `out` as little-endian words; returns how many.
+/// Panics when `out` is too short (a buffer sized for another face: a programming error).
+#[inline]
+pub fn pack_words<W: Word>(out: &mut [u8], values: impl IntoIterator<Item = W>) -> usize {
+    let mut n = 0;
+    for v in values {
+        v.put_le(&mut out[n * W::BYTES..]);
+        n += 1;
+    }
+    n
+}
+
+/// The words of `data`, in order (as [`pack_words`] wrote them).
+#[inline]
+pub fn unpack_words<'a, W: Word + 'a>(data: &'a [u8]) -> impl Iterator<Item = W> + 'a {
+    data.chunks_exact(W::BYTES).map(W::get_le)
 }
 
 /// The rows `rows` of `store` as one message.
@@ -101,6 +152,19 @@ mod tests {
         assert_eq!(unpack_rows(&mut got, &msg), 2);
         assert_eq!(got, vec![sent[2].clone(), sent[0].clone()]);
         assert_eq!(got[1].x.to_bits(), (-0.0f64).to_bits());
+    }
+
+    #[test]
+    fn words_round_trip_in_their_own_precision() {
+        let mut buf = vec![0u8; 3 * 4];
+        assert_eq!(pack_words(&mut buf, [1.5f32, -0.0, f32::MAX]), 3);
+        let back: Vec<f32> = unpack_words(&buf).collect();
+        assert_eq!(back, vec![1.5, -0.0, f32::MAX]);
+        assert_eq!(back[1].to_bits(), (-0.0f32).to_bits());
+        let mut wide = vec![0u8; 16];
+        pack_words(&mut wide, [1e300f64, f64::MIN_POSITIVE]);
+        let back: Vec<f64> = unpack_words(&wide).collect();
+        assert_eq!(back, vec![1e300, f64::MIN_POSITIVE]);
     }
 
     #[test]

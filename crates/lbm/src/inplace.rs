@@ -24,7 +24,7 @@ use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
 use super::rows::{block_tasks, DrainPlan};
 use super::wall_runs::sweep_wall_run;
-use decomposition::{Comm, Side};
+use decomposition::{pack_words, unpack_words, Comm, Side};
 use rayon::prelude::*;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -402,9 +402,7 @@ impl<T: Real> Lattice<T> {
                 }
                 let buf = &self.buf[0];
                 let out = self.halo.send_mut(side);
-                for (m, &src) in plan.send[n].iter().enumerate() {
-                    value(buf, src).put_le(&mut out[m * T::BYTES..]);
-                }
+                pack_words(out, plan.send[n].iter().map(|&src| value(buf, src)));
             }
             let mut halo = std::mem::take(&mut self.halo);
             self.halo_wait_s += halo.exchange(comm, &mut || {});
@@ -415,13 +413,11 @@ impl<T: Real> Lattice<T> {
                 if self.halo.peer(side).is_none() {
                     continue;
                 }
-                let data = self.halo.recv(side);
+                let mut data = unpack_words::<T>(self.halo.recv(side));
                 let buf = &mut self.buf[0];
-                let mut at = 0;
                 for s in dirs {
                     for yp in 0..rows {
-                        buf[s * plane + yp * stride + xp] = T::get_le(&data[at..]);
-                        at += T::BYTES;
+                        buf[s * plane + yp * stride + xp] = data.next().expect("a whole face");
                     }
                 }
             }

@@ -7,7 +7,7 @@ use super::lanes::{has_avx512, prefetch_ahead, Lanes};
 use super::lattice::{FaceCondition, Lattice, Layout, StepError, HALO_DIRS};
 use super::moving::{MovingCells, MovingRun};
 use super::real::Real;
-use decomposition::{Comm, Side, SingleProcess};
+use decomposition::{pack_words, unpack_words, Comm, Side, SingleProcess};
 use rayon::prelude::*;
 
 /// A raw pointer that rayon tasks may share. Each row task writes only its own row of the
@@ -167,14 +167,8 @@ impl<T: Real> Lattice<T> {
             if self.halo.peer(side).is_none() {
                 continue;
             }
-            let out = self.halo.send_mut(side);
-            let mut at = 0;
-            for i in 0..Q {
-                for yp in 0..rows {
-                    src[i * plane + yp * stride + xp].put_le(&mut out[at..]);
-                    at += T::BYTES;
-                }
-            }
+            let column = (0..Q).flat_map(|i| (0..rows).map(move |yp| i * plane + yp * stride + xp));
+            pack_words(self.halo.send_mut(side), column.map(|k| src[k]));
         }
         let mut halo = std::mem::take(&mut self.halo);
         self.halo_wait_s += halo.exchange(comm, &mut || {});
@@ -184,13 +178,9 @@ impl<T: Real> Lattice<T> {
             if self.halo.peer(side).is_none() {
                 continue;
             }
-            let data = self.halo.recv(side);
-            let mut at = 0;
-            for i in 0..Q {
-                for yp in 0..rows {
-                    dst[i * plane + yp * stride + xp] = T::get_le(&data[at..]);
-                    at += T::BYTES;
-                }
+            let column = (0..Q).flat_map(|i| (0..rows).map(move |yp| i * plane + yp * stride + xp));
+            for (k, v) in column.zip(unpack_words::<T>(self.halo.recv(side))) {
+                dst[k] = v;
             }
         }
         self.halo.set_message_bytes(HALO_DIRS * rows * T::BYTES);
@@ -206,14 +196,10 @@ impl<T: Real> Lattice<T> {
             if self.halo.peer(side).is_none() {
                 continue;
             }
-            let out = self.halo.send_mut(side);
-            let mut at = 0;
-            for i in dirs {
-                for yp in 0..rows {
-                    src[acc.own(i, yp * stride + xp)].put_le(&mut out[at..]);
-                    at += T::BYTES;
-                }
-            }
+            let face = dirs
+                .into_iter()
+                .flat_map(|i| (0..rows).map(move |yp| acc.own(i, yp * stride + xp)));
+            pack_words(self.halo.send_mut(side), face.map(|k| src[k]));
         }
     }
 
@@ -226,13 +212,11 @@ impl<T: Real> Lattice<T> {
             if self.halo.peer(side).is_none() {
                 continue;
             }
-            let data = self.halo.recv(side);
-            let mut at = 0;
-            for i in dirs {
-                for yp in 0..rows {
-                    dst[acc.own(i, yp * stride + xp)] = T::get_le(&data[at..]);
-                    at += T::BYTES;
-                }
+            let face = dirs
+                .into_iter()
+                .flat_map(|i| (0..rows).map(move |yp| acc.own(i, yp * stride + xp)));
+            for (k, v) in face.zip(unpack_words::<T>(self.halo.recv(side))) {
+                dst[k] = v;
             }
         }
     }

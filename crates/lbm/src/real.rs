@@ -19,22 +19,17 @@ pub trait Real:
     + Neg<Output = Self>
     + AddAssign
     + SubAssign
+    + decomposition::Word
     + 'static
 {
     /// Name used in reports ("f32"/"f64").
     const NAME: &'static str;
-    /// Bytes per value.
-    const BYTES: usize;
     /// Conversion from f64 (rounding for f32).
     fn from_f64(v: f64) -> Self;
     /// Widening conversion to f64.
     fn to_f64(self) -> f64;
     /// Square root.
     fn sqrt(self) -> Self;
-    /// Write the little-endian bytes of `self` into `out[..BYTES]` (halo and checkpoint buffers).
-    fn put_le(self, out: &mut [u8]);
-    /// Read a value from the little-endian bytes `b[..BYTES]`.
-    fn get_le(b: &[u8]) -> Self;
     /// `self * a + b`: fused (one rounding) where the build targets FMA, plain otherwise
     /// (a fused multiply-add without the instruction would be a slow library call).
     fn mul_add_(self, a: Self, b: Self) -> Self;
@@ -44,7 +39,6 @@ macro_rules! impl_real {
     ($t:ty, $name:expr) => {
         impl Real for $t {
             const NAME: &'static str = $name;
-            const BYTES: usize = std::mem::size_of::<$t>();
             #[inline(always)]
             fn from_f64(v: f64) -> Self {
                 v as $t
@@ -58,10 +52,6 @@ macro_rules! impl_real {
                 <$t>::sqrt(self)
             }
             #[inline(always)]
-            fn put_le(self, out: &mut [u8]) {
-                out[..Self::BYTES].copy_from_slice(&self.to_le_bytes());
-            }
-            #[inline(always)]
             fn mul_add_(self, a: Self, b: Self) -> Self {
                 #[cfg(target_feature = "fma")]
                 {
@@ -71,10 +61,6 @@ macro_rules! impl_real {
                 {
                     self * a + b
                 }
-            }
-            #[inline(always)]
-            fn get_le(b: &[u8]) -> Self {
-                <$t>::from_le_bytes(b[..Self::BYTES].try_into().expect("BYTES long"))
             }
         }
     };

@@ -14,7 +14,7 @@ use super::d2q9::Q;
 use super::lattice::{Face, FaceCondition, Lattice};
 use super::moving::{equilibrium_at, momentum_of, refill_cell, Refill};
 use super::real::Real;
-use decomposition::{Comm, Side};
+use decomposition::{pack_words, unpack_words, Comm, Side};
 use rayon::prelude::*;
 
 impl<T: Real> Lattice<T> {
@@ -123,10 +123,7 @@ impl<T: Real> Lattice<T> {
                 .flat_map(|i| (-1..=self.ny as i64).map(move |y| (i, y)))
                 .map(|(i, y)| self.own_anywhere(x, y, i))
                 .collect();
-            let out = self.halo.send_mut(side);
-            for (at, v) in values.iter().enumerate() {
-                v.put_le(&mut out[at * T::BYTES..]);
-            }
+            pack_words(self.halo.send_mut(side), values);
         }
         let mut halo = std::mem::take(&mut self.halo);
         self.halo_wait_s += halo.exchange(comm, &mut || {});
@@ -137,7 +134,7 @@ impl<T: Real> Lattice<T> {
                 continue;
             }
             let data = self.halo.recv(side);
-            self.full_halo[n].extend((0..Q * rows).map(|at| T::get_le(&data[at * T::BYTES..])));
+            self.full_halo[n].extend(unpack_words::<T>(data).take(Q * rows));
         }
         self.halo
             .set_message_bytes(super::lattice::HALO_DIRS * rows * T::BYTES);

@@ -7,9 +7,7 @@ use super::*;
 /// `values` as little-endian bytes.
 pub(in crate::gpu) fn to_bytes<T: Real>(values: &[T]) -> Vec<u8> {
     let mut out = vec![0u8; values.len() * T::BYTES];
-    for (v, b) in values.iter().zip(out.chunks_exact_mut(T::BYTES)) {
-        v.put_le(b);
-    }
+    decomposition::pack_words(&mut out, values.iter().copied());
     out
 }
 
@@ -22,7 +20,7 @@ pub(in crate::gpu) fn from_bytes<T: Real>(bytes: &[u8]) -> Vec<T> {
 
 /// Append little-endian `bytes` to `out` as values (`T::BYTES` each).
 pub(in crate::gpu) fn extend_from_bytes<T: Real>(bytes: &[u8], out: &mut Vec<T>) {
-    out.extend(bytes.chunks_exact(T::BYTES).map(T::get_le));
+    out.extend(decomposition::unpack_words::<T>(bytes));
 }
 
 impl<T: Real> GpuFluid<T> {
