@@ -117,11 +117,21 @@ pub(super) fn rectangle(
     }
 }
 
+/// Validate a grains scene section by section; returns its warnings.
 pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
     let warnings = Vec::new();
     super::output::validate_grain_domain(&s.domain, ctx)?;
-    let size = s.domain.size();
     let g = &s.grains;
+    validate_material(g, ctx)?;
+    validate_time_step(g, ctx)?;
+    validate_sample(g, s.domain.size(), ctx)?;
+    validate_walls(g, ctx)?;
+    validate_run_and_checks(s, ctx)?;
+    Ok(warnings)
+}
+
+/// The grains' density, damping, gravity and `[grains.contact]`.
+fn validate_material(g: &GrainsSpec, ctx: &Context) -> Result<(), SceneError> {
     positive(ctx, "density_kg_m3", g.density_kg_m3, "the grain density")?;
     non_negative(ctx, "global_damping_1_s", g.global_damping_1_s)?;
     bounded(
@@ -156,6 +166,12 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
             ),
         ));
     }
+    Ok(())
+}
+
+/// `[grains.time_step]`: λ in (0, 1], and a fixed step within λ Δt_cr of the smallest grain.
+fn validate_time_step(g: &GrainsSpec, ctx: &Context) -> Result<(), SceneError> {
+    let c = &g.contact;
     match g.time_step {
         TimeStepSpec::Critical { lambda } | TimeStepSpec::Fixed { lambda, .. } => {
             if !(lambda > 0.0 && lambda <= 1.0) {
@@ -191,6 +207,11 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
             }
         }
     }
+    Ok(())
+}
+
+/// `[grains.sample]`, inside the region of `size` (m).
+fn validate_sample(g: &GrainsSpec, size: [f64; 2], ctx: &Context) -> Result<(), SceneError> {
     match &g.sample {
         SampleSpec::Pack {
             min_m,
@@ -321,6 +342,11 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
             }
         }
     }
+    Ok(())
+}
+
+/// `[[grains.walls]]`: unique names, a length, finite velocities.
+fn validate_walls(g: &GrainsSpec, ctx: &Context) -> Result<(), SceneError> {
     for (n, w) in g.walls.iter().enumerate() {
         if g.walls[..n].iter().any(|o| o.name == w.name) {
             return Err(ctx.err("name", n, format!("wall name `{}` is used twice", w.name)));
@@ -339,6 +365,11 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
             non_negative(ctx, "remove_at_s", t)?;
         }
     }
+    Ok(())
+}
+
+/// `[run]`, `[output]`, the analysis and the checks.
+fn validate_run_and_checks(s: &GrainScene, ctx: &Context) -> Result<(), SceneError> {
     super::output::validate_length(s.run.steps, s.run.end_time_s, ctx)?;
     super::output::validate_output(&s.output, super::output::SceneKind::Grains, ctx)?;
     non_negative(
@@ -380,7 +411,7 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
             ));
         }
     }
-    Ok(warnings)
+    Ok(())
 }
 
 /// The radius distribution of a size spec.

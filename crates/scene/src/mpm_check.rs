@@ -6,7 +6,9 @@ use super::grains_check::{non_negative, rectangle};
 use super::mpm::*;
 use super::mpm_material_check::{in_range, material};
 use super::SceneError;
-use mpm::{critical_dt, fill, GridSpec, MpmSetup, Points, Shape, ShapeKind, Side, VelocityUpdate};
+use mpm::{
+    critical_dt, fill, GridSpec, Material, MpmSetup, Points, Shape, ShapeKind, Side, VelocityUpdate,
+};
 use std::path::{Path, PathBuf};
 
 /// An MPM scene that passed validation, with its derived solver setup.
@@ -82,9 +84,44 @@ pub fn parse_mpm(text: &str, path: &Path) -> Result<ValidMpmScene, SceneError> {
     })
 }
 
+/// Validate an MPM scene section by section; returns the solver's set-up, the CFL limit
+/// h / c (s) and the warnings.
 fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>), SceneError> {
     let warnings = Vec::new();
     let m = &s.mpm;
+    let (h, cells, size) = validate_grid(s, ctx)?;
+    validate_transfer(m, ctx)?;
+    validate_walls(&s.boundaries, ctx)?;
+    let (materials, dt_cr, dt) = validate_materials(m, h, ctx)?;
+    validate_bodies(m, size, ctx)?;
+    validate_run_and_checks(s, ctx)?;
+    let setup = MpmSetup {
+        spec: GridSpec {
+            nx: cells[0],
+            ny: cells[1],
+            h,
+        },
+        shape: m.shape_functions,
+        scheme: m.update,
+        boundaries: s.boundaries.sides(),
+        gravity: m.gravity_m_s2,
+        dt,
+        damping: m.local_damping,
+        velocity_update: match m.velocity_transfer {
+            VelocityTransfer::Flip => VelocityUpdate::Flip {
+                pic: m.pic_fraction,
+            },
+            VelocityTransfer::Apic => VelocityUpdate::Apic,
+        },
+        volumetric_averaging: m.volumetric_averaging,
+        materials,
+        side_walls: m.side_walls,
+    };
+    Ok((setup, dt_cr, warnings))
+}
+
+/// `[domain]`: the cell size and counts; returns h (m), the counts and the size (m).
+fn validate_grid(s: &MpmScene, ctx: &Context) -> Result<(f64, [usize; 2], [f64; 2]), SceneError> {
     let d = &s.domain;
     positive(ctx, "spacing_m", d.spacing_m, "the cell size")?;
     let h = d.spacing_m;
@@ -107,6 +144,11 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             ),
         ));
     }
+    Ok((h, cells, size))
+}
+
+/// The velocity transfer, damping, side walls and gravity of `[mpm]`.
+fn validate_transfer(m: &MpmSpec, ctx: &Context) -> Result<(), SceneError> {
     in_range(
         ctx,
         ("local_damping", 0),
@@ -165,7 +207,11 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
         &m.gravity_m_s2,
         super::limits::MAX_GRAVITY_M_S2,
     )?;
-    let b = &s.boundaries;
+    Ok(())
+}
+
+/// The frictional faces of `[boundaries]`.
+fn validate_walls(b: &MpmBoundaries, ctx: &Context) -> Result<(), SceneError> {
     for (name, side) in [
         ("west", b.west),
         ("east", b.east),
@@ -184,6 +230,16 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             }
         }
     }
+    Ok(())
+}
+
+/// `[[mpm.materials]]` and `[mpm.time_step]`: the materials, the CFL limit h / c (s) and
+/// the time step (s).
+fn validate_materials(
+    m: &MpmSpec,
+    h: f64,
+    ctx: &Context,
+) -> Result<(Vec<Material>, f64, f64), SceneError> {
     if m.materials.is_empty() {
         return Err(ctx.err("materials", 0, "at least one [[mpm.materials]] is needed"));
     }
@@ -220,6 +276,12 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             time_step_s
         }
     };
+    Ok((materials, dt_cr, dt))
+}
+
+/// `[[mpm.bodies]]`: each names a material, has 1–6 points per cell and lies inside the
+/// domain of `size` (m).
+fn validate_bodies(m: &MpmSpec, size: [f64; 2], ctx: &Context) -> Result<(), SceneError> {
     if m.bodies.is_empty() {
         return Err(ctx.err("bodies", 0, "at least one [[mpm.bodies]] is needed"));
     }
@@ -284,6 +346,11 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             }
         }
     }
+    Ok(())
+}
+
+/// `[run]`, `[output]`, the analysis and the checks.
+fn validate_run_and_checks(s: &MpmScene, ctx: &Context) -> Result<(), SceneError> {
     super::output::validate_length(s.run.steps, s.run.end_time_s, ctx)?;
     super::output::validate_output(&s.output, super::output::SceneKind::Mpm, ctx)?;
     non_negative(
@@ -326,29 +393,7 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
             ));
         }
     }
-    let setup = MpmSetup {
-        spec: GridSpec {
-            nx: cells[0],
-            ny: cells[1],
-            h,
-        },
-        shape: m.shape_functions,
-        scheme: m.update,
-        boundaries: s.boundaries.sides(),
-        gravity: m.gravity_m_s2,
-        dt,
-        damping: m.local_damping,
-        velocity_update: match m.velocity_transfer {
-            VelocityTransfer::Flip => VelocityUpdate::Flip {
-                pic: m.pic_fraction,
-            },
-            VelocityTransfer::Apic => VelocityUpdate::Apic,
-        },
-        volumetric_averaging: m.volumetric_averaging,
-        materials,
-        side_walls: m.side_walls,
-    };
-    Ok((setup, dt_cr, warnings))
+    Ok(())
 }
 
 /// The region of a body.

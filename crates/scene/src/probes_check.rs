@@ -13,6 +13,15 @@ pub(super) fn validate_probes_and_analyses(
     ctx: &Context,
     run_end_s: f64,
 ) -> Result<(), SceneError> {
+    validate_probes(s, ctx)?;
+    for a in &s.analyses {
+        validate_analysis(s, a, ctx, run_end_s)?;
+    }
+    validate_checks(&s.checks, ctx)
+}
+
+/// `[[probes]]`: unique names, points inside the domain, naming what exists.
+fn validate_probes(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
     let lx = s.domain.cells[0] as f64 * s.domain.spacing_m;
     let ly = s.domain.cells[1] as f64 * s.domain.spacing_m;
     for (n, p) in s.probes.iter().enumerate() {
@@ -62,8 +71,19 @@ pub(super) fn validate_probes_and_analyses(
             }
         }
     }
+    Ok(())
+}
+
+/// One `[[analyses]]` entry: the probes and keys it needs, its windows within the run
+/// (which ends at `run_end_s`, s).
+fn validate_analysis(
+    s: &Scene,
+    a: &Analysis,
+    ctx: &Context,
+    run_end_s: f64,
+) -> Result<(), SceneError> {
     let probe_kind = |name: &str| s.probes.iter().find(|p| p.name() == name);
-    for a in &s.analyses {
+    {
         match a {
             Analysis::ForceCoefficients {
                 probe,
@@ -211,7 +231,7 @@ pub(super) fn validate_probes_and_analyses(
             _ => {}
         }
     }
-    validate_checks(&s.checks, ctx)
+    Ok(())
 }
 
 /// An averaging window of `window_s` (s) fits in a run of `run_end_s` (s).

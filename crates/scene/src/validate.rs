@@ -8,7 +8,26 @@ use lbm::units::{derive, TimeStepChoice, Units};
 
 /// Validate and derive units. Returns the warnings.
 pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>), SceneError> {
-    let mut warnings = Vec::new();
+    validate_lattice(s, ctx)?;
+    let units = validate_units(s, ctx)?;
+    validate_initial(s, &units, ctx)?;
+    let mut warnings = stability_warnings(&s.fluid, &units);
+    validate_operator(&s.fluid, ctx)?;
+    validate_boundaries(s, ctx)?;
+    validate_obstacles(s, ctx)?;
+    validate_run(s, ctx, &units)?;
+    // The run's end (s): as given, or its steps times the derived time step.
+    let run_end_s = s
+        .run
+        .end_time_s
+        .unwrap_or(s.run.steps.unwrap_or(0) as f64 * units.dt_s);
+    super::probes_check::validate_probes_and_analyses(s, ctx, run_end_s)?;
+    warnings.extend(super::coupling_check::validate(s, &units, ctx)?);
+    Ok((units, warnings))
+}
+
+/// `[domain]`: at least 2 × 2 cells, no more than any machine holds, a positive spacing.
+fn validate_lattice(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
     let [nx, ny] = s.domain.cells;
     if nx < 2 || ny < 2 {
         return Err(ctx.err(
@@ -29,6 +48,12 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
         ));
     }
     positive(ctx, "spacing_m", s.domain.spacing_m, "the lattice spacing")?;
+    Ok(())
+}
+
+/// `[fluid]`'s physical figures and its one time-step choice; returns the derived lattice
+/// units (τ > ½, Ma < 0.3 unless allowed).
+fn validate_units(s: &Scene, ctx: &Context) -> Result<Units, SceneError> {
     let f = &s.fluid;
     positive(ctx, "density_kg_m3", f.density_kg_m3, "the density")?;
     positive(
@@ -106,6 +131,12 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
             ),
         ));
     }
+    Ok(units)
+}
+
+/// `[fluid.initial]`: an initial speed the lattice can carry.
+fn validate_initial(s: &Scene, units: &Units, ctx: &Context) -> Result<(), SceneError> {
+    let f = &s.fluid;
     let initial = match f.initial {
         Initial::Rest => None,
         Initial::Uniform { velocity_m_s } => {
@@ -132,6 +163,12 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
             ));
         }
     }
+    Ok(())
+}
+
+/// Warnings on the Mach number and on τ near ½, by operator.
+fn stability_warnings(f: &Fluid, units: &Units) -> Vec<String> {
+    let mut warnings = Vec::new();
     if units.mach > 0.1 {
         warnings.push(format!(
             "Mach number {:.3} > 0.1: expect compressibility errors of order Ma² = {:.1e}",
@@ -147,6 +184,11 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
         };
         warnings.push(format!("τ = {:.4} is close to ½: {advice}", units.tau));
     }
+    warnings
+}
+
+/// The collision operator's parameters, Smagorinsky's constant and the body force.
+fn validate_operator(f: &Fluid, ctx: &Context) -> Result<(), SceneError> {
     match &f.collision {
         CollisionModel::Bgk => {}
         CollisionModel::Trt { magic } => {
@@ -180,17 +222,7 @@ pub(crate) fn validate(s: &Scene, ctx: &Context) -> Result<(Units, Vec<String>),
             return Err(ctx.err("body_acceleration_m_s2", 0, "must be finite"));
         }
     }
-    validate_boundaries(s, ctx)?;
-    validate_obstacles(s, ctx)?;
-    validate_run(s, ctx, &units)?;
-    // The run's end (s): as given, or its steps times the derived time step.
-    let run_end_s = s
-        .run
-        .end_time_s
-        .unwrap_or(s.run.steps.unwrap_or(0) as f64 * units.dt_s);
-    super::probes_check::validate_probes_and_analyses(s, ctx, run_end_s)?;
-    warnings.extend(super::coupling_check::validate(s, &units, ctx)?);
-    Ok((units, warnings))
+    Ok(())
 }
 
 fn validate_boundaries(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
