@@ -75,55 +75,10 @@ impl<T: Real> GpuFluid<T> {
                 .map(|j| make(&format!("populations {b}.{j}"), part_bytes))
                 .collect()
         });
-        // Geometry: plain-cell bits (cells the CPU runs as bulk), then cell types.
-        let words = plane.div_ceil(32);
-        let mut geom = vec![0u32; words + plane];
-        for (y, row) in host.plan.iter().enumerate() {
-            for &(a, b) in &row.bulk {
-                for x in a as usize..b as usize {
-                    let k = (y + 1) * stride + x + 1;
-                    geom[k / 32] |= 1 << (k % 32);
-                }
-            }
-        }
-        for (k, &t) in host.types.iter().enumerate() {
-            geom[words + k] = t as u32;
-        }
-        // Cell lists in force-slot order (as on the CPU): per row, special cells then edge
-        // cells. Edge cells are computed after the halo exchange.
-        let mut inner = vec![[0u32; 2]];
-        let mut edge = vec![[0u32; 2]];
-        for (y, row) in host.plan.iter().enumerate() {
-            let first = host.forces.row_start[y];
-            for (j, &x) in row.special.iter().enumerate() {
-                let k = (y + 1) * stride + x as usize + 1;
-                inner.push([k as u32, (first + j) as u32]);
-            }
-            let first = first + row.special.len();
-            for (j, &x) in row.edge.iter().enumerate() {
-                let k = (y + 1) * stride + x as usize + 1;
-                edge.push([k as u32, (first + j) as u32]);
-            }
-        }
+        let (geom, words) = geometry_words(&host);
+        let (inner, edge, rest_force) = cell_lists(&host);
         let nslots = host.forces.row_start[ny];
         let ns = host.solids.len();
-        let mut rest_force = vec![[0.0f64; 2]; nslots * ns];
-        for list in [&inner, &edge] {
-            for &[k, slot] in &list[1..] {
-                for i in 1..Q {
-                    let n =
-                        (k as isize - CX[i] as isize - CY[i] as isize * stride as isize) as usize;
-                    let t = host.types[n];
-                    if t != FLUID && t <= MAX_SOLID {
-                        let f = &mut rest_force[slot as usize * ns + t as usize - 1];
-                        f[0] -= 2.0 * W[i] * CX[i] as f64;
-                        f[1] -= 2.0 * W[i] * CY[i] as f64;
-                    }
-                }
-            }
-        }
-        inner[0][0] = (inner.len() - 1) as u32;
-        edge[0][0] = (edge.len() - 1) as u32;
         let halo_at = nslots * ns * 2;
         let out_at = halo_at + 4 * HALO_DIRS * (ny + 2);
         let aux_values = out_at + 3 * nx * ny;
@@ -189,73 +144,13 @@ impl<T: Real> GpuFluid<T> {
         q.write_buffer(&inner_buf, 0, bytemuck::cast_slice(&inner));
         q.write_buffer(&edge_buf, 0, bytemuck::cast_slice(&edge));
         // Layouts: group 0 the lattice, group 1 a cell list.
-        let mut entries = vec![
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            storage(1, true),
-            storage(2, true),
-            storage(3, false),
-            storage(4, false),
-        ];
-        for j in 0..split.parts as u32 {
-            entries.push(storage(SRC_BINDING + j, true));
-            entries.push(storage(DST_BINDING + j, false));
-        }
-        let lattice_layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lattice"),
-            entries: &entries,
-        });
+        let lattice_layout = lattice_layout(dev, split);
         let list_layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cell list"),
             entries: &[storage(0, true)],
         });
-        let groups: [wgpu::BindGroup; 2] = std::array::from_fn(|c| {
-            let mut e = vec![
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: geo_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: prm_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: geom_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: aux_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: bad_buf.as_entire_binding(),
-                },
-            ];
-            for j in 0..split.parts {
-                e.push(wgpu::BindGroupEntry {
-                    binding: SRC_BINDING + j as u32,
-                    resource: pops[c][j].as_entire_binding(),
-                });
-                e.push(wgpu::BindGroupEntry {
-                    binding: DST_BINDING + j as u32,
-                    resource: pops[c ^ 1][j].as_entire_binding(),
-                });
-            }
-            dev.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("lattice"),
-                layout: &lattice_layout,
-                entries: &e,
-            })
-        });
+        let uniforms = [&geo_buf, &prm_buf, &geom_buf, &aux_buf, &bad_buf];
+        let groups = lattice_groups(dev, &lattice_layout, uniforms, &pops, split);
         let list_group = |buf: &wgpu::Buffer, len: usize| CellList {
             group: dev.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("cell list"),
@@ -406,4 +301,133 @@ impl<T: Real> GpuFluid<T> {
             advance: make("advance_step"),
         }
     }
+}
+
+/// The device's geometry words of `host`: one bit per padded cell that the CPU runs as
+/// bulk (plain cells), then each padded cell's type; and where the types start.
+fn geometry_words<T: Real>(host: &Lattice<T>) -> (Vec<u32>, usize) {
+    let (stride, plane) = (host.stride, host.plane);
+    // Geometry: plain-cell bits (cells the CPU runs as bulk), then cell types.
+    let words = plane.div_ceil(32);
+    let mut geom = vec![0u32; words + plane];
+    for (y, row) in host.plan.iter().enumerate() {
+        for &(a, b) in &row.bulk {
+            for x in a as usize..b as usize {
+                let k = (y + 1) * stride + x + 1;
+                geom[k / 32] |= 1 << (k % 32);
+            }
+        }
+    }
+    for (k, &t) in host.types.iter().enumerate() {
+        geom[words + k] = t as u32;
+    }
+    (geom, words)
+}
+
+/// The special and edge cell lists of `host` (padded cell, force slot; the first entry
+/// holds the count), and each force slot's rest-state term per solid: −2 w_i c_i for each
+/// of its links into that solid.
+#[allow(clippy::type_complexity)]
+fn cell_lists<T: Real>(host: &Lattice<T>) -> (Vec<[u32; 2]>, Vec<[u32; 2]>, Vec<[f64; 2]>) {
+    let (ny, stride) = (host.ny, host.stride);
+    // Cell lists in force-slot order (as on the CPU): per row, special cells then edge
+    // cells. Edge cells are computed after the halo exchange.
+    let mut inner = vec![[0u32; 2]];
+    let mut edge = vec![[0u32; 2]];
+    for (y, row) in host.plan.iter().enumerate() {
+        let first = host.forces.row_start[y];
+        for (j, &x) in row.special.iter().enumerate() {
+            let k = (y + 1) * stride + x as usize + 1;
+            inner.push([k as u32, (first + j) as u32]);
+        }
+        let first = first + row.special.len();
+        for (j, &x) in row.edge.iter().enumerate() {
+            let k = (y + 1) * stride + x as usize + 1;
+            edge.push([k as u32, (first + j) as u32]);
+        }
+    }
+    let nslots = host.forces.row_start[ny];
+    let ns = host.solids.len();
+    let mut rest_force = vec![[0.0f64; 2]; nslots * ns];
+    for list in [&inner, &edge] {
+        for &[k, slot] in &list[1..] {
+            for i in 1..Q {
+                let n = (k as isize - CX[i] as isize - CY[i] as isize * stride as isize) as usize;
+                let t = host.types[n];
+                if t != FLUID && t <= MAX_SOLID {
+                    let f = &mut rest_force[slot as usize * ns + t as usize - 1];
+                    f[0] -= 2.0 * W[i] * CX[i] as f64;
+                    f[1] -= 2.0 * W[i] * CY[i] as f64;
+                }
+            }
+        }
+    }
+    inner[0][0] = (inner.len() - 1) as u32;
+    edge[0][0] = (edge.len() - 1) as u32;
+    (inner, edge, rest_force)
+}
+
+/// The layout of the lattice group: the uniforms, parameters, geometry, aux and
+/// instability buffers, then each part's source and destination populations.
+fn lattice_layout(dev: &wgpu::Device, split: Split) -> wgpu::BindGroupLayout {
+    let mut entries = vec![
+        wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        },
+        storage(1, true),
+        storage(2, true),
+        storage(3, false),
+        storage(4, false),
+    ];
+    for j in 0..split.parts as u32 {
+        entries.push(storage(SRC_BINDING + j, true));
+        entries.push(storage(DST_BINDING + j, false));
+    }
+    dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lattice"),
+        entries: &entries,
+    })
+}
+
+/// The two lattice groups (reading buffer c, writing buffer 1 − c), binding `uniforms`
+/// (geo, parameters, geometry, aux, instability) and the populations `pops`.
+fn lattice_groups(
+    dev: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    uniforms: [&wgpu::Buffer; 5],
+    pops: &[Vec<wgpu::Buffer>; 2],
+    split: Split,
+) -> [wgpu::BindGroup; 2] {
+    std::array::from_fn(|c| {
+        let mut e: Vec<wgpu::BindGroupEntry> = uniforms
+            .iter()
+            .enumerate()
+            .map(|(b, buf)| wgpu::BindGroupEntry {
+                binding: b as u32,
+                resource: buf.as_entire_binding(),
+            })
+            .collect();
+        for j in 0..split.parts {
+            e.push(wgpu::BindGroupEntry {
+                binding: SRC_BINDING + j as u32,
+                resource: pops[c][j].as_entire_binding(),
+            });
+            e.push(wgpu::BindGroupEntry {
+                binding: DST_BINDING + j as u32,
+                resource: pops[c ^ 1][j].as_entire_binding(),
+            });
+        }
+        dev.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lattice"),
+            layout,
+            entries: &e,
+        })
+    })
 }
