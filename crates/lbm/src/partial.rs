@@ -90,7 +90,10 @@ pub(crate) unsafe fn blend_partial<T: Real>(
 /// of 64 cells per diameter settling at Re ≈ 250 went unstable inside itself). A full cell
 /// therefore takes the solids' equilibria Σ_s B_s h^eq_i(ρ, u_s): the same mass and, as
 /// that reflected part carries neither (Σ_i (h_ī − h^eq_ī) (1, c_i) = 0), the same momentum
-/// exchange as eq. 8 gives; only the non-equilibrium part is dropped.
+/// as eq. 8 gives the cell; only the non-equilibrium part is dropped. (With a body force F
+/// on the fluid, eq. 8's u carries Guo's half-force, so its momentum is ρ u_s + F/2 where the
+/// equilibrium's is ρ u_s; the grain is charged eq. 8's exchange either way. No shipped
+/// coupled scene puts a body force on the fluid.)
 #[inline(always)]
 pub(crate) fn is_full<T: Real>(b_total: T) -> bool {
     b_total >= T::from_f64(1.0)
