@@ -170,6 +170,9 @@ struct FluidStepper<'a, T: Real + hdf5::H5Type> {
     /// The last step's fields, kept from its snapshot for the summary's totals (holding
     /// the fields between snapshots would cost three values per cell for the whole run).
     final_fields: Option<Fields>,
+    /// The fields `observe` computed for the snapshot that follows in the same step (their
+    /// speeds checked first).
+    snapshot_fields: Option<Fields>,
     /// What a checkpoint carries besides the populations.
     totals_initial: Totals,
     momentum_initial: Option<[[f64; 2]; 2]>,
@@ -205,12 +208,26 @@ impl<T: Real + hdf5::H5Type> Stepper for FluidStepper<'_, T> {
         if probe {
             self.sim.record_probes(comm);
         }
+        if due.snapshot {
+            // The snapshot's fields (read after the probes, as the snapshot read them), their
+            // speeds checked: a run can go wrong with every density positive (a flow
+            // accelerated past the lattice's speed of sound).
+            let f = self.sim.fields(comm);
+            let x0 = self.sim.fluid.lattice().x_offset();
+            if let Some(e) = supersonic_cell(&f, x0, due.step, comm) {
+                return Ok(Flow::Unstable(e));
+            }
+            self.snapshot_fields = Some(f);
+        }
         Ok(Flow::Go)
     }
 
     fn snapshot(&mut self, comm: &dyn Comm) -> Result<(), RunError> {
         let step = self.steps_done();
-        let f = self.sim.fields(comm);
+        let f = match self.snapshot_fields.take() {
+            Some(f) => f,
+            None => self.sim.fields(comm),
+        };
         self.out
             .snapshot(step, &self.scene.units, &mut self.sim, comm, &f)?;
         if step == self.last_step {
@@ -250,6 +267,35 @@ impl<T: Real + hdf5::H5Type> Stepper for FluidStepper<'_, T> {
         }
         Ok(())
     }
+}
+
+/// The first fluid cell (lowest global row, then column) over all ranks whose speed is not
+/// below the lattice's speed of sound 1/√3 (or is NaN), as the error that stops the run;
+/// `fields` are this rank's, its first column global column `x0`. Collective.
+fn supersonic_cell(fields: &Fields, x0: usize, step: u64, comm: &dyn Comm) -> Option<String> {
+    let limit = 1.0 / 3f64.sqrt();
+    let mine: Vec<f64> = (0..fields.rho.len())
+        .filter(|&k| fields.fluid[k])
+        .map(|k| (k, fields.ux[k].hypot(fields.uy[k])))
+        .find(|&(_, speed)| !(speed < limit))
+        .map(|(k, speed)| {
+            let (x, y) = (k % fields.nx + x0, k / fields.nx);
+            vec![y as f64, x as f64, speed]
+        })
+        .unwrap_or_default();
+    if !comm.any(!mine.is_empty()) {
+        return None;
+    }
+    let all = comm.all_gather_f64(&mine);
+    let first = all
+        .chunks(3)
+        .min_by(|a, b| (a[0], a[1]).partial_cmp(&(b[0], b[1])).expect("finite"))?;
+    Some(format!(
+        "unstable at step {step}: cell ({}, {}) moves at {:.3} lattice units, at or past the \
+         lattice's speed of sound 1/√3 ≈ 0.577 (densities can stay positive); reduce the \
+         velocity or body force, raise τ or refine the lattice",
+        first[1] as usize, first[0] as usize, first[2]
+    ))
 }
 
 /// The fluid and the grains' momenta (an analysis asks for the momentum balance; it reads
@@ -386,6 +432,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         out,
         last_step: n,
         final_fields: None,
+        snapshot_fields: None,
         totals_initial,
         momentum_initial,
         grains_initial,
