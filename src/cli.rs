@@ -87,7 +87,12 @@ pub enum Command {
         ranks: usize,
     },
     /// Print version, threads, ranks and the GPU adapters wgpu finds.
-    Info,
+    Info {
+        /// Worker threads, as `run --threads` would use them (default: all cores, or
+        /// RAYON_NUM_THREADS).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Write a complete, commented scene of one kind to start from (stdout, or `--out`).
     Template {
         /// The kind of scene.

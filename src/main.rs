@@ -63,7 +63,7 @@ fn real_main() -> Result<i32> {
         }
     };
     match cli.command {
-        Command::Info => info(),
+        Command::Info { threads } => info(threads),
         Command::Template { kind, out } => template(kind, out),
         Command::Check { scene, ranks } => check_cmd::check(&scene, ranks),
         Command::StabilityMap { out, threads } => stability_map(out, threads),
@@ -72,7 +72,13 @@ fn real_main() -> Result<i32> {
 }
 
 /// `grainflow info`: version, threads, ranks and the GPU adapters.
-fn info() -> Result<i32> {
+fn info(threads: Option<usize>) -> Result<i32> {
+    if let Some(t) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("setting up the thread pool")?;
+    }
     println!("grainflow {}", env!("CARGO_PKG_VERSION"));
     println!(
         "threads: {} (rayon; set --threads or RAYON_NUM_THREADS)",

@@ -272,6 +272,13 @@ fn check_and_info_commands() {
         .output()
         .unwrap();
     assert!(String::from_utf8_lossy(&o.stdout).contains("threads:"));
+    // `info` takes `--threads`, as its own output suggests.
+    let o = Command::new(env!("CARGO_BIN_EXE_grainflow"))
+        .args(["info", "--threads", "3"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("threads: 3 "));
 }
 
 #[test]
