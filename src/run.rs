@@ -273,7 +273,7 @@ impl<T: Real + hdf5::H5Type> Stepper for FluidStepper<'_, T> {
 /// below the lattice's speed of sound 1/√3 (or is NaN), as the error that stops the run;
 /// `fields` are this rank's, its first column global column `x0`. Collective.
 fn supersonic_cell(fields: &Fields, x0: usize, step: u64, comm: &dyn Comm) -> Option<String> {
-    let limit = 1.0 / 3f64.sqrt();
+    let limit = lbm::units::SOUND_SPEED;
     let mine: Vec<f64> = (0..fields.rho.len())
         .filter(|&k| fields.fluid[k])
         .map(|k| (k, fields.ux[k].hypot(fields.uy[k])))

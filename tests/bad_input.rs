@@ -290,3 +290,30 @@ fn strouhal_transient_longer_than_the_run_is_rejected() {
     );
     expect_error(&scene, &["skip_s", "lengthen the run"]);
 }
+
+/// A flow accelerated past the lattice's speed of sound keeps every density positive (the
+/// tiny box, periodic all round, under a body force speeds up without bound): the run stops
+/// as unstable at the first snapshot that sees it, naming the step and the cell. It used to
+/// run to the end and report `ok` with the fluid at 2.5 cells per step.
+#[test]
+fn a_flow_past_the_speed_of_sound_stops_the_run() {
+    let scene = GOOD
+        .replace(
+            "lattice_velocity = 0.05",
+            "lattice_velocity = 0.05\nbody_acceleration_m_s2 = [0.05, 0.0]",
+        )
+        .replace("kind = \"wall\" }", "kind = \"periodic\" }")
+        .replace(
+            "north = { kind = \"moving-wall\", velocity_m_s = [0.01, 0.0] }",
+            "north = { kind = \"periodic\" }",
+        )
+        .replace(
+            "steps = 20",
+            "steps = 200\n\n[output]\nevery_steps = 10\npictures = false",
+        );
+    assert!(scene.contains("south = { kind = \"periodic\" }"));
+    let (code, text, _d) = grainflow(&scene, &[]);
+    assert_eq!(code, 3, "{text}");
+    assert!(text.contains("unstable at step 50: cell (0, 0)"), "{text}");
+    assert!(text.contains("speed of sound"), "{text}");
+}

@@ -195,98 +195,88 @@ pub fn run_all(inp: &Inputs) -> Outcome {
 
 /// Analysis `a`, its results into `r`.
 fn run_one(inp: &Inputs, a: &Analysis, r: &mut Results) -> Result<(), AnalysisError> {
-    let r = &mut *r;
-    {
-        match a {
-            Analysis::Poiseuille => flows::poiseuille(inp, r)?,
-            Analysis::Couette => flows::couette(inp, r)?,
-            Analysis::TaylorGreen => flows::taylor_green(inp, r)?,
-            Analysis::Ghia {
-                u_reference,
-                v_reference,
-                column,
-            } => flows::ghia(inp, u_reference, v_reference, column, r)?,
-            Analysis::ForceCoefficients {
-                probe,
-                velocity_m_s,
-                length_m,
-                average_last_s,
-            } => signals::force_coefficients(
-                inp,
-                probe,
-                *velocity_m_s,
-                *length_m,
-                *average_last_s,
-                r,
-            )?,
-            Analysis::Strouhal {
-                probe,
-                signal,
-                velocity_m_s,
-                length_m,
-                skip_s,
-            } => signals::strouhal(inp, probe, *signal, *velocity_m_s, *length_m, *skip_s, r)?,
-            Analysis::MassDrift => {
-                let (a, b) = (inp.totals.0.mass, inp.totals.1.mass);
-                r.insert("mass.relative_drift".into(), (b - a) / a);
-            }
-            Analysis::Settling {
-                probe,
-                average_last_s,
-            } => sedimentation::settling(inp, probe, *average_last_s, r)?,
-            Analysis::DraftKissTumble {
+    match a {
+        Analysis::Poiseuille => flows::poiseuille(inp, r)?,
+        Analysis::Couette => flows::couette(inp, r)?,
+        Analysis::TaylorGreen => flows::taylor_green(inp, r)?,
+        Analysis::Ghia {
+            u_reference,
+            v_reference,
+            column,
+        } => flows::ghia(inp, u_reference, v_reference, column, r)?,
+        Analysis::ForceCoefficients {
+            probe,
+            velocity_m_s,
+            length_m,
+            average_last_s,
+        } => signals::force_coefficients(inp, probe, *velocity_m_s, *length_m, *average_last_s, r)?,
+        Analysis::Strouhal {
+            probe,
+            signal,
+            velocity_m_s,
+            length_m,
+            skip_s,
+        } => signals::strouhal(inp, probe, *signal, *velocity_m_s, *length_m, *skip_s, r)?,
+        Analysis::MassDrift => {
+            let (a, b) = (inp.totals.0.mass, inp.totals.1.mass);
+            r.insert("mass.relative_drift".into(), (b - a) / a);
+        }
+        Analysis::Settling {
+            probe,
+            average_last_s,
+        } => sedimentation::settling(inp, probe, *average_last_s, r)?,
+        Analysis::DraftKissTumble {
+            lower,
+            upper,
+            contact_gap_m,
+            average_last_s,
+            fall_window_s,
+            terminal_velocity_m_s,
+        } => sedimentation::draft_kiss_tumble(
+            inp,
+            &sedimentation::DktSetup {
                 lower,
                 upper,
-                contact_gap_m,
-                average_last_s,
-                fall_window_s,
-                terminal_velocity_m_s,
-            } => sedimentation::draft_kiss_tumble(
-                inp,
-                &sedimentation::DktSetup {
-                    lower,
-                    upper,
-                    contact_gap_m: *contact_gap_m,
-                    window_s: *average_last_s,
-                    fall_window_s: *fall_window_s,
-                    terminal_velocity_m_s: *terminal_velocity_m_s,
-                },
-                r,
-            )?,
-            Analysis::ColumnCollapse {
-                wall_x_m,
-                floor_y_m,
-                deposit,
-                pore_pressure,
-            } => collapse::submerged(
-                inp,
-                (*wall_x_m, *floor_y_m),
-                deposit,
-                pore_pressure.as_deref(),
-                r,
-            )?,
-            Analysis::MomentumBalance => {
-                let Some((p0, p1)) = inp.momentum else {
-                    return Err(err("momentum-balance", "the run has no grains"));
-                };
-                let total = |p: &[[f64; 2]; 2]| [p[0][0] + p[1][0], p[0][1] + p[1][1]];
-                let (a, b) = (total(&p0), total(&p1));
-                let norm = a[0].hypot(a[1]);
-                if norm == 0.0 {
-                    return Err(err(
-                        "momentum-balance",
-                        "the initial momentum is zero: give a grain or the fluid a velocity",
-                    ));
-                }
-                r.insert(
-                    "momentum.relative_drift".into(),
-                    (b[0] - a[0]).hypot(b[1] - a[1]) / norm,
-                );
-                r.insert("momentum.fluid_x_kg_m_s".into(), p1[0][0]);
-                r.insert("momentum.fluid_y_kg_m_s".into(), p1[0][1]);
-                r.insert("momentum.grains_x_kg_m_s".into(), p1[1][0]);
-                r.insert("momentum.grains_y_kg_m_s".into(), p1[1][1]);
+                contact_gap_m: *contact_gap_m,
+                window_s: *average_last_s,
+                fall_window_s: *fall_window_s,
+                terminal_velocity_m_s: *terminal_velocity_m_s,
+            },
+            r,
+        )?,
+        Analysis::ColumnCollapse {
+            wall_x_m,
+            floor_y_m,
+            deposit,
+            pore_pressure,
+        } => collapse::submerged(
+            inp,
+            (*wall_x_m, *floor_y_m),
+            deposit,
+            pore_pressure.as_deref(),
+            r,
+        )?,
+        Analysis::MomentumBalance => {
+            let Some((p0, p1)) = inp.momentum else {
+                return Err(err("momentum-balance", "the run has no grains"));
+            };
+            let total = |p: &[[f64; 2]; 2]| [p[0][0] + p[1][0], p[0][1] + p[1][1]];
+            let (a, b) = (total(&p0), total(&p1));
+            let norm = a[0].hypot(a[1]);
+            if norm == 0.0 {
+                return Err(err(
+                    "momentum-balance",
+                    "the initial momentum is zero: give a grain or the fluid a velocity",
+                ));
             }
+            r.insert(
+                "momentum.relative_drift".into(),
+                (b[0] - a[0]).hypot(b[1] - a[1]) / norm,
+            );
+            r.insert("momentum.fluid_x_kg_m_s".into(), p1[0][0]);
+            r.insert("momentum.fluid_y_kg_m_s".into(), p1[0][1]);
+            r.insert("momentum.grains_x_kg_m_s".into(), p1[1][0]);
+            r.insert("momentum.grains_y_kg_m_s".into(), p1[1][1]);
         }
     }
     Ok(())

@@ -226,60 +226,56 @@ mod tests {
     }
 
     fn per_body_sums_match<R: LinkRule>(case: usize, seed: &mut u64) {
-        {
-            {
-                let (f, solid) = slab(case);
-                let fluid = |k: usize| !solid[k];
-                let views = grains_at_rest(&f, 30, seed);
-                let mut c = planned::<R>(f, &views, &fluid);
-                let links = R::of(&mut c.cells).links.links.len();
-                assert!(links > 500, "case {case}: {links} links");
-                R::of(&mut c.cells).link_momentum = (0..links).map(|_| next(seed) - 0.5).collect();
-                c.common.sums.reset(&views, f.global_nx);
-                c.cells.collect(&mut c.common, &views);
-                let want = all_partials(&c.common.sums, views.len());
-                // The same from per-body sums.
-                c.box_bodies(&views, true);
-                let cells = R::of(&mut c.cells);
-                let (plan, m) = (&cells.links, &cells.link_momentum);
-                let load = |l: usize, centre: [f64; 2]| {
-                    let (i, b) = (plan.links[l].dir(), plan.links[l].body());
-                    let image = plan.bodies[b].centre;
-                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                    let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
-                    let arm = [mid[0] - image[0], mid[1] - image[1]];
-                    let (px, py) = (-m[l] * cx, -m[l] * cy);
-                    (b, [px, py, arm[0] * py - arm[1] * px])
-                };
-                let mut cols = std::mem::take(&mut c.common.body_columns);
-                backend_sums(&f, (&plan.rows, &plan.cells, &plan.start), load, &mut cols);
-                c.common.body_columns = cols;
-                c.common.sums.reset(&views, f.global_nx);
-                c.collect_bodies(&views);
-                let got = all_partials(&c.common.sums, views.len());
-                assert_eq!(got.len(), want.len(), "case {case}");
-                assert!(got == want, "case {case}: the column sums differ");
-                // A plan entry outside every box is caught, not lost.
-                let slot = c
-                    .common
-                    .body_columns
-                    .counts
-                    .iter()
-                    .position(|&n| n > 0)
-                    .unwrap();
-                c.common.body_columns.counts[slot] = 0;
-                let lost = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    c.common.sums.reset(&views, f.global_nx);
-                    c.collect_bodies(&views)
-                }));
-                assert!(lost.is_err(), "case {case}: a lost link went unnoticed");
-                // A grain too large for its lattice's height: no sums wanted, the backend
-                // reports each link's momentum.
-                let mut big = views.clone();
-                big[0].radius = 0.5 * f.ny as f64 - 4.0;
-                c.box_bodies(&big, true);
-                assert!(!c.common.body_columns.wanted(), "case {case}");
-            }
-        }
+        let (f, solid) = slab(case);
+        let fluid = |k: usize| !solid[k];
+        let views = grains_at_rest(&f, 30, seed);
+        let mut c = planned::<R>(f, &views, &fluid);
+        let links = R::of(&mut c.cells).links.links.len();
+        assert!(links > 500, "case {case}: {links} links");
+        R::of(&mut c.cells).link_momentum = (0..links).map(|_| next(seed) - 0.5).collect();
+        c.common.sums.reset(&views, f.global_nx);
+        c.cells.collect(&mut c.common, &views);
+        let want = all_partials(&c.common.sums, views.len());
+        // The same from per-body sums.
+        c.box_bodies(&views, true);
+        let cells = R::of(&mut c.cells);
+        let (plan, m) = (&cells.links, &cells.link_momentum);
+        let load = |l: usize, centre: [f64; 2]| {
+            let (i, b) = (plan.links[l].dir(), plan.links[l].body());
+            let image = plan.bodies[b].centre;
+            let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+            let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+            let arm = [mid[0] - image[0], mid[1] - image[1]];
+            let (px, py) = (-m[l] * cx, -m[l] * cy);
+            (b, [px, py, arm[0] * py - arm[1] * px])
+        };
+        let mut cols = std::mem::take(&mut c.common.body_columns);
+        backend_sums(&f, (&plan.rows, &plan.cells, &plan.start), load, &mut cols);
+        c.common.body_columns = cols;
+        c.common.sums.reset(&views, f.global_nx);
+        c.collect_bodies(&views);
+        let got = all_partials(&c.common.sums, views.len());
+        assert_eq!(got.len(), want.len(), "case {case}");
+        assert!(got == want, "case {case}: the column sums differ");
+        // A plan entry outside every box is caught, not lost.
+        let slot = c
+            .common
+            .body_columns
+            .counts
+            .iter()
+            .position(|&n| n > 0)
+            .unwrap();
+        c.common.body_columns.counts[slot] = 0;
+        let lost = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            c.common.sums.reset(&views, f.global_nx);
+            c.collect_bodies(&views)
+        }));
+        assert!(lost.is_err(), "case {case}: a lost link went unnoticed");
+        // A grain too large for its lattice's height: no sums wanted, the backend
+        // reports each link's momentum.
+        let mut big = views.clone();
+        big[0].radius = 0.5 * f.ny as f64 - 4.0;
+        c.box_bodies(&big, true);
+        assert!(!c.common.body_columns.wanted(), "case {case}");
     }
 }

@@ -629,7 +629,7 @@ impl LbmDem {
     /// Errors (on every rank) when a grain moves faster than the lattice's speed of sound
     /// c_s = 1/√3 cells per step, the lowest id first. Collective.
     fn check_speeds(&self, comm: &dyn Comm) -> Result<(), CouplingError> {
-        let limit = self.units.velocity_to_si(1.0 / 3f64.sqrt());
+        let limit = self.units.velocity_to_si(lbm::units::SOUND_SPEED);
         let g = &self.dem.system.grains;
         let mine: Vec<f64> = (0..self.dem.system.owned())
             .filter(|&i| !(g.vx[i].hypot(g.vy[i]) <= limit))

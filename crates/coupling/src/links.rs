@@ -285,118 +285,110 @@ mod tests {
     }
 
     fn links_carry_their_grains_motion<R: LinkRule>(case: usize, grains: usize, seed: &mut u64) {
-        {
-            {
-                let (f, solid) = slab(case);
-                let fluid = |k: usize| !solid[k];
-                let views: Vec<GrainView> = (0..grains)
-                    .map(|_| GrainView {
-                        centre: [
-                            f.x0 as f64 - 6.0 + next(seed) * (f.nx as f64 + 12.0),
-                            -3.0 + next(seed) * 66.0,
-                        ],
-                        radius: 2.0 + 4.0 * next(seed),
-                        velocity: [next(seed) - 0.5, next(seed) - 0.5],
-                        omega: 0.2 * (next(seed) - 0.5),
-                    })
-                    .collect();
-                // The plan built on 1, 2 and 5 threads: the same, slot for slot.
-                let plans: Vec<LinkCells<R>> = [1, 2, 5]
-                    .into_iter()
-                    .map(|threads| {
-                        let pool = rayon::ThreadPoolBuilder::new()
-                            .num_threads(threads)
-                            .build()
-                            .unwrap();
-                        pool.install(|| planned_links::<R>(f, &views, &fluid))
-                    })
-                    .collect();
-                for other in &plans[1..] {
-                    let (a, b) = (&plans[0].links, &other.links);
-                    assert_eq!(a.rows, b.rows, "case {case}");
-                    assert_eq!(a.cells, b.cells, "case {case}");
-                    assert_eq!(a.start, b.start, "case {case}");
-                    assert_eq!(a.links, b.links, "case {case}");
-                    assert_eq!(a.fractions, b.fractions, "case {case}");
-                }
-                let c = &plans[1];
-                let plan = &c.links;
-                // Every boundary cell is planned, with one link per covered neighbour.
-                let (mut cells, mut covered) = (0, 0);
-                for y in 0..f.ny as i64 {
-                    for x in 0..f.nx as i64 {
-                        let k = f.padded(x, y);
-                        let n = (1..Q)
-                            .filter(|&i| c.owner[neighbour(&f, k, i, -1)] != NONE)
-                            .count();
-                        if c.owner[k] == NONE && fluid(k) && n > 0 {
-                            (cells, covered) = (cells + 1, covered + n);
-                        }
-                    }
-                }
-                assert_eq!((plan.cells.len(), plan.links.len()), (cells, covered));
-                let (mut links, mut images, mut halved, mut below) = (0, 0, 0, 0);
-                for y in 0..f.ny {
-                    for n in plan.rows[y] as usize..plan.rows[y + 1] as usize {
-                        let k = plan.cells[n] as usize;
-                        let centre = f.centre_in_row(k, y);
-                        for l in plan.start[n] as usize..plan.start[n + 1] as usize {
-                            let link = plan.links[l];
-                            let i = link.dir();
-                            let g = c.owner[neighbour(&f, k, i, -1)];
-                            assert_ne!(g, NONE, "case {case}: a link from an uncovered cell");
-                            assert_eq!(c.body_grain[link.body()], g, "case {case}");
-                            let (cx, cy) = (CX[i] as f64, CY[i] as f64);
-                            let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
-                            let grain = views[g as usize];
-                            let image = nearest_image(&f, &grain, mid);
-                            assert_eq!(plan.bodies[link.body()].centre, image, "case {case}");
-                            images += (image != grain.centre) as usize;
-                            let u = GrainView {
-                                centre: image,
-                                ..grain
-                            }
-                            .surface_velocity(mid);
-                            // Ladd 1994, eq. 3.3: 2 w_i (c_i·u_w)/c_s².
-                            let wall = 6.0 * W[i] * (cx * u[0] + cy * u[1]);
-                            assert_eq!(plan.wall(f.stride, k, y, link).to_bits(), wall.to_bits());
-                            let q = plan.q(l);
-                            if !R::INTERPOLATED {
-                                assert_eq!(q, 0.5);
-                            } else {
-                                let exact = crate::geometry::link_fraction(
-                                    centre,
-                                    [-cx, -cy],
-                                    image,
-                                    grain.radius,
-                                );
-                                // Below ½ only with a plain, uncovered fluid cell upstream.
-                                let ahead = neighbour(&f, k, i, 1);
-                                let open = c.owner[ahead] == NONE && fluid(ahead);
-                                let want = if exact < 0.5 && !open { 0.5 } else { exact };
-                                assert_eq!(q.to_bits(), want.to_bits(), "case {case}");
-                                halved += (exact < 0.5 && !open) as usize;
-                                below += (q < 0.5) as usize;
-                            }
-                            links += 1;
-                        }
-                    }
-                }
-                if grains < 30 {
-                    assert_eq!(links > 0, grains > 0, "case {case}, {grains} grains");
-                    return;
-                }
-                assert!(links > 1000, "case {case}: only {links} links");
-                if f.periodic_x {
-                    assert!(images > 0, "case {case}: no link meets a periodic image");
-                }
-                if R::INTERPOLATED {
-                    assert!(
-                        halved > 0 && below > 0,
-                        "case {case}: {halved} halved, {below}"
-                    );
+        let (f, solid) = slab(case);
+        let fluid = |k: usize| !solid[k];
+        let views: Vec<GrainView> = (0..grains)
+            .map(|_| GrainView {
+                centre: [
+                    f.x0 as f64 - 6.0 + next(seed) * (f.nx as f64 + 12.0),
+                    -3.0 + next(seed) * 66.0,
+                ],
+                radius: 2.0 + 4.0 * next(seed),
+                velocity: [next(seed) - 0.5, next(seed) - 0.5],
+                omega: 0.2 * (next(seed) - 0.5),
+            })
+            .collect();
+        // The plan built on 1, 2 and 5 threads: the same, slot for slot.
+        let plans: Vec<LinkCells<R>> = [1, 2, 5]
+            .into_iter()
+            .map(|threads| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| planned_links::<R>(f, &views, &fluid))
+            })
+            .collect();
+        for other in &plans[1..] {
+            let (a, b) = (&plans[0].links, &other.links);
+            assert_eq!(a.rows, b.rows, "case {case}");
+            assert_eq!(a.cells, b.cells, "case {case}");
+            assert_eq!(a.start, b.start, "case {case}");
+            assert_eq!(a.links, b.links, "case {case}");
+            assert_eq!(a.fractions, b.fractions, "case {case}");
+        }
+        let c = &plans[1];
+        let plan = &c.links;
+        // Every boundary cell is planned, with one link per covered neighbour.
+        let (mut cells, mut covered) = (0, 0);
+        for y in 0..f.ny as i64 {
+            for x in 0..f.nx as i64 {
+                let k = f.padded(x, y);
+                let n = (1..Q)
+                    .filter(|&i| c.owner[neighbour(&f, k, i, -1)] != NONE)
+                    .count();
+                if c.owner[k] == NONE && fluid(k) && n > 0 {
+                    (cells, covered) = (cells + 1, covered + n);
                 }
             }
+        }
+        assert_eq!((plan.cells.len(), plan.links.len()), (cells, covered));
+        let (mut links, mut images, mut halved, mut below) = (0, 0, 0, 0);
+        for y in 0..f.ny {
+            for n in plan.rows[y] as usize..plan.rows[y + 1] as usize {
+                let k = plan.cells[n] as usize;
+                let centre = f.centre_in_row(k, y);
+                for l in plan.start[n] as usize..plan.start[n + 1] as usize {
+                    let link = plan.links[l];
+                    let i = link.dir();
+                    let g = c.owner[neighbour(&f, k, i, -1)];
+                    assert_ne!(g, NONE, "case {case}: a link from an uncovered cell");
+                    assert_eq!(c.body_grain[link.body()], g, "case {case}");
+                    let (cx, cy) = (CX[i] as f64, CY[i] as f64);
+                    let mid = [centre[0] - 0.5 * cx, centre[1] - 0.5 * cy];
+                    let grain = views[g as usize];
+                    let image = nearest_image(&f, &grain, mid);
+                    assert_eq!(plan.bodies[link.body()].centre, image, "case {case}");
+                    images += (image != grain.centre) as usize;
+                    let u = GrainView {
+                        centre: image,
+                        ..grain
+                    }
+                    .surface_velocity(mid);
+                    // Ladd 1994, eq. 3.3: 2 w_i (c_i·u_w)/c_s².
+                    let wall = 6.0 * W[i] * (cx * u[0] + cy * u[1]);
+                    assert_eq!(plan.wall(f.stride, k, y, link).to_bits(), wall.to_bits());
+                    let q = plan.q(l);
+                    if !R::INTERPOLATED {
+                        assert_eq!(q, 0.5);
+                    } else {
+                        let exact =
+                            crate::geometry::link_fraction(centre, [-cx, -cy], image, grain.radius);
+                        // Below ½ only with a plain, uncovered fluid cell upstream.
+                        let ahead = neighbour(&f, k, i, 1);
+                        let open = c.owner[ahead] == NONE && fluid(ahead);
+                        let want = if exact < 0.5 && !open { 0.5 } else { exact };
+                        assert_eq!(q.to_bits(), want.to_bits(), "case {case}");
+                        halved += (exact < 0.5 && !open) as usize;
+                        below += (q < 0.5) as usize;
+                    }
+                    links += 1;
+                }
+            }
+        }
+        if grains < 30 {
+            assert_eq!(links > 0, grains > 0, "case {case}, {grains} grains");
+            return;
+        }
+        assert!(links > 1000, "case {case}: only {links} links");
+        if f.periodic_x {
+            assert!(images > 0, "case {case}: no link meets a periodic image");
+        }
+        if R::INTERPOLATED {
+            assert!(
+                halved > 0 && below > 0,
+                "case {case}: {halved} halved, {below}"
+            );
         }
     }
 }

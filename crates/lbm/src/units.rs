@@ -74,6 +74,10 @@ pub enum TimeStepChoice {
     RelaxationTime(f64),
 }
 
+/// The lattice's speed of sound c_s = 1/√3 (lattice units): a fluid cell or a grain at or
+/// past it makes a run meaningless.
+pub const SOUND_SPEED: f64 = 0.577_350_269_189_625_8;
+
 /// Derive all lattice parameters. Preconditions (checked by validation): positive Δx, ν,
 /// ρ₀, U, L, and a positive choice.
 pub fn derive(

@@ -83,153 +83,151 @@ fn validate_analysis(
     run_end_s: f64,
 ) -> Result<(), SceneError> {
     let probe_kind = |name: &str| s.probes.iter().find(|p| p.name() == name);
-    {
-        match a {
-            Analysis::ForceCoefficients {
-                probe,
-                velocity_m_s,
-                length_m,
-                ..
-            } => {
-                if !matches!(probe_kind(probe), Some(Probe::Force { .. })) {
-                    return Err(ctx.err(
-                        "probe",
-                        0,
-                        format!("force-coefficients needs a force probe named `{probe}`"),
-                    ));
-                }
-                positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
-                positive(ctx, "length_m", *length_m, "the reference length")?;
+    match a {
+        Analysis::ForceCoefficients {
+            probe,
+            velocity_m_s,
+            length_m,
+            ..
+        } => {
+            if !matches!(probe_kind(probe), Some(Probe::Force { .. })) {
+                return Err(ctx.err(
+                    "probe",
+                    0,
+                    format!("force-coefficients needs a force probe named `{probe}`"),
+                ));
             }
-            Analysis::Strouhal {
-                probe,
-                velocity_m_s,
-                length_m,
-                skip_s,
-                ..
-            } => {
-                if !matches!(probe_kind(probe), Some(Probe::Point { .. })) {
+            positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
+            positive(ctx, "length_m", *length_m, "the reference length")?;
+        }
+        Analysis::Strouhal {
+            probe,
+            velocity_m_s,
+            length_m,
+            skip_s,
+            ..
+        } => {
+            if !matches!(probe_kind(probe), Some(Probe::Point { .. })) {
+                return Err(ctx.err(
+                    "probe",
+                    0,
+                    format!("strouhal needs a point probe named `{probe}`"),
+                ));
+            }
+            positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
+            positive(ctx, "length_m", *length_m, "the reference length")?;
+            if *skip_s >= run_end_s {
+                return Err(ctx.err(
+                    "skip_s",
+                    0,
+                    format!(
+                        "strouhal skips {skip_s} s of transient, but the run ends at \
+                         {run_end_s} s: shorten skip_s or lengthen the run"
+                    ),
+                ));
+            }
+        }
+        Analysis::Settling {
+            probe,
+            average_last_s,
+        } => {
+            if !matches!(probe_kind(probe), Some(Probe::Grain { .. })) {
+                return Err(ctx.err(
+                    "probe",
+                    0,
+                    format!("settling needs a grain probe named `{probe}`"),
+                ));
+            }
+            positive(
+                ctx,
+                "average_last_s",
+                *average_last_s,
+                "the averaging window",
+            )?;
+            within_run(ctx, *average_last_s, run_end_s)?;
+        }
+        Analysis::DraftKissTumble {
+            lower,
+            upper,
+            contact_gap_m,
+            average_last_s,
+            fall_window_s,
+            terminal_velocity_m_s,
+        } => {
+            for p in [lower, upper] {
+                if !matches!(probe_kind(p), Some(Probe::Grain { .. })) {
                     return Err(ctx.err(
-                        "probe",
+                        "lower",
                         0,
-                        format!("strouhal needs a point probe named `{probe}`"),
+                        format!("draft-kiss-tumble needs a grain probe named `{p}`"),
                     ));
                 }
-                positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
-                positive(ctx, "length_m", *length_m, "the reference length")?;
-                if *skip_s >= run_end_s {
+            }
+            positive(ctx, "contact_gap_m", *contact_gap_m, "the contact gap")?;
+            positive(
+                ctx,
+                "average_last_s",
+                *average_last_s,
+                "the averaging window",
+            )?;
+            within_run(ctx, *average_last_s, run_end_s)?;
+            fall_window(run_end_s, ctx, *fall_window_s, *terminal_velocity_m_s)?;
+        }
+        Analysis::ColumnCollapse {
+            deposit,
+            pore_pressure,
+            ..
+        } => {
+            if s.grains.is_none() {
+                return Err(ctx.err(
+                    "kind",
+                    0,
+                    "column-collapse in a fluid scene needs grains: add [grains] and [coupling]",
+                ));
+            }
+            if !matches!(probe_kind(deposit), Some(Probe::Deposit { .. })) {
+                return Err(ctx.err(
+                    "deposit",
+                    0,
+                    format!("column-collapse needs a deposit probe named `{deposit}`"),
+                ));
+            }
+            if let Some(p) = pore_pressure {
+                if !matches!(probe_kind(p), Some(Probe::Point { .. })) {
                     return Err(ctx.err(
-                        "skip_s",
+                        "pore_pressure",
+                        0,
+                        format!("column-collapse needs a point probe named `{p}`"),
+                    ));
+                }
+            }
+        }
+        Analysis::MomentumBalance if s.grains.is_none() => {
+            return Err(ctx.err(
+                "kind",
+                0,
+                "momentum-balance needs grains: add [grains] and [coupling]",
+            ));
+        }
+        Analysis::Ghia {
+            u_reference,
+            v_reference,
+            ..
+        } => {
+            for (k, f) in [("u_reference", u_reference), ("v_reference", v_reference)] {
+                if !ctx.base_dir.join(f).is_file() {
+                    return Err(ctx.err(
+                        k,
                         0,
                         format!(
-                            "strouhal skips {skip_s} s of transient, but the run ends at \
-                             {run_end_s} s: shorten skip_s or lengthen the run"
+                            "reference file {} does not exist",
+                            ctx.base_dir.join(f).display()
                         ),
                     ));
                 }
             }
-            Analysis::Settling {
-                probe,
-                average_last_s,
-            } => {
-                if !matches!(probe_kind(probe), Some(Probe::Grain { .. })) {
-                    return Err(ctx.err(
-                        "probe",
-                        0,
-                        format!("settling needs a grain probe named `{probe}`"),
-                    ));
-                }
-                positive(
-                    ctx,
-                    "average_last_s",
-                    *average_last_s,
-                    "the averaging window",
-                )?;
-                within_run(ctx, *average_last_s, run_end_s)?;
-            }
-            Analysis::DraftKissTumble {
-                lower,
-                upper,
-                contact_gap_m,
-                average_last_s,
-                fall_window_s,
-                terminal_velocity_m_s,
-            } => {
-                for p in [lower, upper] {
-                    if !matches!(probe_kind(p), Some(Probe::Grain { .. })) {
-                        return Err(ctx.err(
-                            "lower",
-                            0,
-                            format!("draft-kiss-tumble needs a grain probe named `{p}`"),
-                        ));
-                    }
-                }
-                positive(ctx, "contact_gap_m", *contact_gap_m, "the contact gap")?;
-                positive(
-                    ctx,
-                    "average_last_s",
-                    *average_last_s,
-                    "the averaging window",
-                )?;
-                within_run(ctx, *average_last_s, run_end_s)?;
-                fall_window(run_end_s, ctx, *fall_window_s, *terminal_velocity_m_s)?;
-            }
-            Analysis::ColumnCollapse {
-                deposit,
-                pore_pressure,
-                ..
-            } => {
-                if s.grains.is_none() {
-                    return Err(ctx.err(
-                        "kind",
-                        0,
-                        "column-collapse in a fluid scene needs grains: add [grains] and [coupling]",
-                    ));
-                }
-                if !matches!(probe_kind(deposit), Some(Probe::Deposit { .. })) {
-                    return Err(ctx.err(
-                        "deposit",
-                        0,
-                        format!("column-collapse needs a deposit probe named `{deposit}`"),
-                    ));
-                }
-                if let Some(p) = pore_pressure {
-                    if !matches!(probe_kind(p), Some(Probe::Point { .. })) {
-                        return Err(ctx.err(
-                            "pore_pressure",
-                            0,
-                            format!("column-collapse needs a point probe named `{p}`"),
-                        ));
-                    }
-                }
-            }
-            Analysis::MomentumBalance if s.grains.is_none() => {
-                return Err(ctx.err(
-                    "kind",
-                    0,
-                    "momentum-balance needs grains: add [grains] and [coupling]",
-                ));
-            }
-            Analysis::Ghia {
-                u_reference,
-                v_reference,
-                ..
-            } => {
-                for (k, f) in [("u_reference", u_reference), ("v_reference", v_reference)] {
-                    if !ctx.base_dir.join(f).is_file() {
-                        return Err(ctx.err(
-                            k,
-                            0,
-                            format!(
-                                "reference file {} does not exist",
-                                ctx.base_dir.join(f).display()
-                            ),
-                        ));
-                    }
-                }
-            }
-            _ => {}
         }
+        _ => {}
     }
     Ok(())
 }
