@@ -65,6 +65,7 @@ pub fn lbm_dem<T: Real>(
             gravity,
             dt: units.dt_s / substeps as f64,
             lambda: gs.lambda(),
+            fixed: gs.fixed_ids(),
         },
         face_wall_friction: spec.contact.friction,
         substeps,

@@ -6,6 +6,7 @@
 pub mod checks;
 pub mod collapse;
 pub mod flows;
+pub mod permeability;
 pub mod sedimentation;
 mod share;
 mod signals;
@@ -135,6 +136,9 @@ pub fn result_names(scene: &ValidScene) -> Vec<String> {
                 ]
                 .map(|q| format!("momentum.{q}")),
             ),
+            Analysis::Permeability => {
+                names.extend(permeability::QUANTITIES.map(|q| format!("permeability.{q}")))
+            }
         }
     }
     names
@@ -150,6 +154,7 @@ pub fn needs_fields(scene: &ValidScene) -> bool {
                 | Analysis::Couette
                 | Analysis::TaylorGreen
                 | Analysis::Ghia { .. }
+                | Analysis::Permeability
         )
     })
 }
@@ -256,6 +261,7 @@ fn run_one(inp: &Inputs, a: &Analysis, r: &mut Results) -> Result<(), AnalysisEr
             pore_pressure.as_deref(),
             r,
         )?,
+        Analysis::Permeability => permeability::permeability(inp, r)?,
         Analysis::MomentumBalance => {
             let Some((p0, p1)) = inp.momentum else {
                 return Err(err("momentum-balance", "the run has no grains"));

@@ -361,6 +361,7 @@ mod tests {
             gravity: [0.0, -9.81],
             dt,
             lambda: 0.1,
+            fixed: Vec::new(),
         };
         let mut dist = SlabDem::new(g, &[0.0, 0.03], setup, false, &comm).unwrap();
         for _ in 0..2000 {

@@ -67,6 +67,9 @@ pub struct DemSetup {
     pub dt: f64,
     /// The stability fraction λ that `dt` must respect: dt ≤ λ Δt_cr (eq. 5.60).
     pub lambda: f64,
+    /// Ids of the grains held in place (neither moving nor turning; forces on them are
+    /// still computed and reported), sorted, every one of them on every rank.
+    pub fixed: Vec<u64>,
 }
 
 /// Grains, walls and the contact law of one rank, advanced by velocity Verlet.
@@ -135,6 +138,8 @@ pub struct DemSystem {
     pub(crate) carry: Vec<f64>,
     /// Values per grain in `carry` (0: none).
     pub(crate) carry_width: usize,
+    /// Ids of the grains held in place, sorted ([`DemSetup::fixed`]).
+    pub(crate) fixed: Vec<u64>,
 }
 
 impl DemSystem {
@@ -157,6 +162,7 @@ impl DemSystem {
             gravity,
             dt,
             lambda,
+            fixed: Vec::new(),
         };
         let mut s = Self::unstarted(grains, setup, allow_overlap)?;
         s.rebuild_list();
@@ -177,8 +183,11 @@ impl DemSystem {
             gravity,
             dt,
             lambda,
+            mut fixed,
         } = setup;
         model.validate()?;
+        fixed.sort_unstable();
+        fixed.dedup();
         if !(lambda > 0.0 && lambda <= 1.0) {
             return Err(DemError::Parameter {
                 name: "lambda",
@@ -225,6 +234,7 @@ impl DemSystem {
             external_on: false,
             carry: Vec::new(),
             carry_width: 0,
+            fixed,
         })
     }
 
@@ -412,6 +422,27 @@ impl DemSystem {
             .zip(g.torque.par_iter().zip(g.inv_inertia.par_iter()))
             .with_min_len(4096)
             .for_each(|(w, (t, inv))| *w += h * t * inv);
+        self.hold_fixed();
+    }
+
+    /// Zero the velocities of the owned grains held in place (none when nothing is fixed).
+    fn hold_fixed(&mut self) {
+        if self.fixed.is_empty() {
+            return;
+        }
+        let g = &mut self.grains;
+        for i in 0..self.owned {
+            if self.fixed.binary_search(&g.id[i]).is_ok() {
+                g.vx[i] = 0.0;
+                g.vy[i] = 0.0;
+                g.omega[i] = 0.0;
+            }
+        }
+    }
+
+    /// Whether grain `id` is held in place.
+    pub fn is_fixed(&self, id: u64) -> bool {
+        self.fixed.binary_search(&id).is_ok()
     }
 
     /// Contacts active at the last force evaluation that this rank accounts for: grain

@@ -284,4 +284,10 @@ pub struct ListedGrain {
     /// Initial angular velocity (rad/s, counter-clockwise).
     #[serde(default)]
     pub angular_velocity_rad_s: f64,
+    /// Held in place for the whole run: it neither moves nor turns, and the forces on it
+    /// (contacts, the fluid) are still computed and reported. For fixed obstacles made of
+    /// grains (a rough bed, an array of cylinders). Contacts with it are damped with the
+    /// pair's reduced mass, as between two free grains.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fixed: bool,
 }

@@ -326,6 +326,18 @@ fn validate_sample(g: &GrainsSpec, size: [f64; 2], ctx: &Context) -> Result<(), 
                         ),
                     ));
                 }
+                let moving = l.velocity_m_s != [0.0, 0.0] || l.angular_velocity_rad_s != 0.0;
+                if l.fixed && moving {
+                    return Err(ctx.err(
+                        "fixed",
+                        n,
+                        format!(
+                            "grain {n} is held in place (`fixed = true`) but is given a \
+                             velocity: drop `velocity_m_s` and `angular_velocity_rad_s`, or \
+                             `fixed`"
+                        ),
+                    ));
+                }
             }
         }
         SampleSpec::Csv { file } => {
@@ -514,6 +526,18 @@ impl ValidGrainScene {
             gravity: self.scene.grains.gravity_m_s2,
             dt: self.time_step(grains),
             lambda: self.lambda(),
+            fixed: self.fixed_ids(),
+        }
+    }
+
+    /// Ids of the grains held in place: listed grains with `fixed = true` (ids are the
+    /// sample's order).
+    pub fn fixed_ids(&self) -> Vec<u64> {
+        match &self.scene.grains.sample {
+            SampleSpec::List { grains } => (0..grains.len() as u64)
+                .filter(|&i| grains[i as usize].fixed)
+                .collect(),
+            _ => Vec::new(),
         }
     }
 

@@ -202,6 +202,7 @@ fn validate_analysis(
                 }
             }
         }
+        Analysis::Permeability => permeability_scene(ctx, s)?,
         Analysis::MomentumBalance if s.grains.is_none() => {
             return Err(ctx.err(
                 "kind",
@@ -228,6 +229,43 @@ fn validate_analysis(
             }
         }
         _ => {}
+    }
+    Ok(())
+}
+
+/// A permeability analysis needs fixed grains in a fully periodic fluid driven by a body
+/// acceleration.
+fn permeability_scene(ctx: &Context, s: &Scene) -> Result<(), SceneError> {
+    let fixed = match s.grains.as_ref().map(|g| &g.sample) {
+        Some(super::grains::SampleSpec::List { grains }) => grains.iter().all(|g| g.fixed),
+        _ => false,
+    };
+    if !fixed {
+        return Err(ctx.err(
+            "kind",
+            0,
+            "permeability needs grains held in place: list them in [grains.sample] \
+             (kind = \"list\") with `fixed = true`, and add [coupling]",
+        ));
+    }
+    let b = &s.boundaries;
+    let periodic = [&b.west, &b.east, &b.south, &b.north]
+        .iter()
+        .all(|f| matches!(f, BoundarySpec::Periodic));
+    if !periodic {
+        return Err(ctx.err(
+            "kind",
+            0,
+            "permeability measures a periodic array: make all four boundaries periodic",
+        ));
+    }
+    if s.fluid.body_acceleration_m_s2 == [0.0, 0.0] {
+        return Err(ctx.err(
+            "kind",
+            0,
+            "permeability needs a flow: set [fluid] body_acceleration_m_s2 (it stands in \
+             for the pressure gradient)",
+        ));
     }
     Ok(())
 }

@@ -500,6 +500,13 @@ pub enum Analysis {
     /// Momentum of fluid plus grains: `momentum.relative_drift` = |p_end − p_0| / |p_0|
     /// (needs non-zero initial momentum), and `momentum.grains_x_kg_m_s` etc.
     MomentumBalance,
+    /// Stokes flow through a periodic array of fixed grains driven by the fluid's body
+    /// acceleration, against the drag on square arrays of cylinders of Sangani & Acrivos
+    /// (1982), from the final fields: `permeability.superficial_velocity_m_s`,
+    /// `permeability.permeability_m2` (Darcy's k = ν U / |G|), `permeability.solid_fraction`
+    /// (with the hydrodynamic radius), `permeability.drag_factor` (K = F / (μ U) per grain),
+    /// `permeability.sangani_acrivos_ratio` and `permeability.reynolds`.
+    Permeability,
     /// Collapse of a column of grains in the fluid (Lajeunesse et al. 2005 geometry; Rondon
     /// et al. 2011 submerged): the `collapse.*` results of a grains run (run-out, heights,
     /// a, the laws' ratios), `collapse.packing_fraction` of the column (disk area over
