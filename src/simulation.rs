@@ -70,13 +70,49 @@ impl StageTimes {
 
 /// Where a probe samples.
 enum ProbeTarget {
-    /// Global cell (x, y).
-    Cell(usize, usize),
+    /// A point: the global fluid cells (x, y) around it, with their bilinear weights.
+    Point(Vec<(usize, usize, f64)>),
     Solid(u16),
     /// A grain of a coupled run, by id.
     Grain(u64),
     /// The deposit of a coupled run's grains against a wall (x) on a floor (y), m.
     Deposit(f64, f64),
+}
+
+/// The cells whose centres surround `p` (m) on a lattice of spacing `dx` (m) and size `n`,
+/// with their bilinear weights, keeping the cells where `fluid(x, y)` and renormalising the
+/// weights over them (a point on an obstacle's surface reads the fluid beside it; a point
+/// within half a cell of the domain's edge, the cells inside). `None` when no fluid cell
+/// surrounds the point.
+fn bilinear_corners(
+    p: [f64; 2],
+    dx: f64,
+    n: [usize; 2],
+    fluid: impl Fn(usize, usize) -> bool,
+) -> Option<Vec<(usize, usize, f64)>> {
+    // Cell (i, j)'s centre is at ((i + ½) dx, (j + ½) dx).
+    let g = [p[0] / dx - 0.5, p[1] / dx - 0.5];
+    let base = g.map(|v| v.floor());
+    let frac = [g[0] - base[0], g[1] - base[1]];
+    let mut corners = Vec::with_capacity(4);
+    for (dy, wy) in [(0, 1.0 - frac[1]), (1, frac[1])] {
+        for (dx_, wx) in [(0, 1.0 - frac[0]), (1, frac[0])] {
+            let (x, y) = (base[0] as i64 + dx_, base[1] as i64 + dy);
+            let inside = x >= 0 && y >= 0 && (x as usize) < n[0] && (y as usize) < n[1];
+            let w = wx * wy;
+            if inside && w > 0.0 && fluid(x as usize, y as usize) {
+                corners.push((x as usize, y as usize, w));
+            }
+        }
+    }
+    let total: f64 = corners.iter().map(|c| c.2).sum();
+    if corners.is_empty() || total <= 0.0 {
+        return None;
+    }
+    for c in &mut corners {
+        c.2 /= total;
+    }
+    Some(corners)
 }
 
 /// Why a step could not be taken.
@@ -125,19 +161,21 @@ fn probe_targets(
     for p in &scene.scene.probes {
         match p {
             Probe::Point { name, position_m } => {
-                let x = (position_m[0] / units.dx_m) as usize;
-                let y = (position_m[1] / units.dx_m) as usize;
-                if built.setup.cells[y * built.setup.nx + x] != 0 {
-                    return Err(scene
-                        .invalid(
-                            "position_m",
-                            format!(
-                                "probe `{name}` lies inside an obstacle; move it into the fluid"
-                            ),
-                        )
-                        .into());
-                }
-                targets.push(ProbeTarget::Cell(x, y));
+                let setup = &built.setup;
+                let fluid = |x: usize, y: usize| setup.cells[y * setup.nx + x] == 0;
+                let corners =
+                    bilinear_corners(*position_m, units.dx_m, [setup.nx, setup.ny], fluid)
+                        .ok_or_else(|| {
+                            scene.invalid(
+                                "position_m",
+                                format!(
+                                    "probe `{name}` lies inside an obstacle (no fluid cell \
+                                     centre around it); move it into the fluid or onto the \
+                                     obstacle's surface"
+                                ),
+                            )
+                        })?;
+                targets.push(ProbeTarget::Point(corners));
                 series.push(Series::new(name, vec!["ux_m_s", "uy_m_s", "pressure_pa"]));
             }
             Probe::Force { name, obstacle } => {
@@ -351,9 +389,10 @@ impl<T: Real> Simulation<T> {
             })
             .collect();
         let probe_on_rank_face = comm.size() > 1
-            && targets
-                .iter()
-                .any(|t| matches!(*t, ProbeTarget::Cell(x, _) if edges.contains(&x)));
+            && targets.iter().any(|t| match t {
+                ProbeTarget::Point(c) => c.iter().any(|(x, _, _)| edges.contains(x)),
+                _ => false,
+            });
         let ramp_s = inlet_ramp_s(scene);
         let mut sim = Self {
             probe_on_rank_face,
@@ -456,48 +495,17 @@ impl<T: Real> Simulation<T> {
         let points = self
             .targets
             .iter()
-            .any(|p| matches!(p, ProbeTarget::Cell(..)));
+            .any(|p| matches!(p, ProbeTarget::Point(..)));
         if points {
             self.show_grains();
         }
         if self.probe_on_rank_face || (points && self.grains.is_some() && comm.size() > 1) {
             self.fluid.refresh_halos(comm);
         }
-        let (x0, nx) = (self.fluid.lattice().x_offset(), self.fluid.lattice().nx());
-        let cells: Vec<(usize, usize)> = self
-            .targets
-            .iter()
-            .filter_map(|t| match *t {
-                ProbeTarget::Cell(x, y) if (x0..x0 + nx).contains(&x) => Some((x - x0, y)),
-                _ => None,
-            })
-            .collect();
-        let mut mine = Vec::new();
-        for (rho, u) in self.fluid.sample(&cells) {
-            mine.extend([
-                self.units.velocity_to_si(u[0]),
-                self.units.velocity_to_si(u[1]),
-                self.units.drho_to_pressure(rho - 1.0),
-            ]);
-        }
-        // Owned point probes of rank 0, then rank 1, …: reassemble in scene order.
-        let all = comm.all_gather_f64(&mine);
-        let mut at = 0;
-        let mut point = vec![[0.0; 3]; self.targets.len()];
-        for r in 0..comm.size() {
-            let slab = self.partition.slab(r);
-            for (k, target) in self.targets.iter().enumerate() {
-                if let ProbeTarget::Cell(x, _) = *target {
-                    if (slab.x_begin..slab.x_end).contains(&x) {
-                        point[k].copy_from_slice(&all[at..at + 3]);
-                        at += 3;
-                    }
-                }
-            }
-        }
+        let point = self.sample_points(comm);
         for (k, (s, target)) in self.series.iter_mut().zip(&self.targets).enumerate() {
             match *target {
-                ProbeTarget::Cell(..) => s.push(step, t, &point[k]),
+                ProbeTarget::Point(..) => s.push(step, t, &point[k]),
                 ProbeTarget::Grain(id) => {
                     let c = self
                         .grains
@@ -528,6 +536,53 @@ impl<T: Real> Simulation<T> {
             }
         }
         self.times.seconds[stage::PROBES] += t0.elapsed().as_secs_f64();
+    }
+
+    /// Velocity (m/s) and pressure (Pa) at every point probe (by target index; zero for
+    /// other targets): each rank samples the corner cells it owns, and every rank sums each
+    /// probe's corners in their fixed order, so the values have the same bits on any rank
+    /// count. Collective.
+    fn sample_points(&mut self, comm: &dyn Comm) -> Vec<[f64; 3]> {
+        let (x0, nx) = (self.fluid.lattice().x_offset(), self.fluid.lattice().nx());
+        let mut tags = Vec::new();
+        let mut cells = Vec::new();
+        for (k, target) in self.targets.iter().enumerate() {
+            if let ProbeTarget::Point(corners) = target {
+                for (j, &(x, y, _)) in corners.iter().enumerate() {
+                    if (x0..x0 + nx).contains(&x) {
+                        tags.push((k, j));
+                        cells.push((x - x0, y));
+                    }
+                }
+            }
+        }
+        let mut mine = Vec::with_capacity(5 * cells.len());
+        for ((k, j), (rho, u)) in tags.into_iter().zip(self.fluid.sample(&cells)) {
+            mine.extend([
+                k as f64,
+                j as f64,
+                self.units.velocity_to_si(u[0]),
+                self.units.velocity_to_si(u[1]),
+                self.units.drho_to_pressure(rho - 1.0),
+            ]);
+        }
+        let all = comm.all_gather_f64(&mine);
+        let mut values = vec![Vec::new(); self.targets.len()];
+        for r in all.chunks_exact(5) {
+            values[r[0] as usize].push((r[1] as usize, [r[2], r[3], r[4]]));
+        }
+        let mut point = vec![[0.0; 3]; self.targets.len()];
+        for (k, target) in self.targets.iter().enumerate() {
+            if let ProbeTarget::Point(corners) = target {
+                values[k].sort_by_key(|v| v.0);
+                for (j, v) in &values[k] {
+                    for c in 0..3 {
+                        point[k][c] += corners[*j].2 * v[c];
+                    }
+                }
+            }
+        }
+        point
     }
 
     /// This slab's fields at the current step (exchanged halos refreshed first; the fluid

@@ -77,14 +77,16 @@ pub fn result_names(scene: &ValidScene) -> Vec<String> {
             Analysis::Ghia { .. } => {
                 names.extend(["ghia.max_u_deviation".into(), "ghia.max_v_deviation".into()])
             }
-            Analysis::ForceCoefficients { probe, .. } => names.extend([
-                format!("{probe}.drag_coefficient"),
-                format!("{probe}.lift_coefficient"),
-            ]),
+            Analysis::ForceCoefficients { probe, .. } => {
+                names.extend(signals::FORCE_QUANTITIES.map(|q| format!("{probe}.{q}")))
+            }
             Analysis::Strouhal { probe, .. } => names.extend([
                 format!("{probe}.strouhal"),
                 format!("{probe}.relative_oscillation"),
             ]),
+            Analysis::PressureDifference { upstream, .. } => {
+                names.push(format!("{upstream}.pressure_difference_pa"))
+            }
             Analysis::MassDrift => names.push("mass.relative_drift".into()),
             Analysis::Settling { probe, .. } => names.extend(
                 [
@@ -222,6 +224,11 @@ fn run_one(inp: &Inputs, a: &Analysis, r: &mut Results) -> Result<(), AnalysisEr
             length_m,
             skip_s,
         } => signals::strouhal(inp, probe, *signal, *velocity_m_s, *length_m, *skip_s, r)?,
+        Analysis::PressureDifference {
+            upstream,
+            downstream,
+            average_last_s,
+        } => signals::pressure_difference(inp, upstream, downstream, *average_last_s, r)?,
         Analysis::MassDrift => {
             let (a, b) = (inp.totals.0.mass, inp.totals.1.mass);
             r.insert("mass.relative_drift".into(), (b - a) / a);

@@ -17,7 +17,15 @@ pub(super) fn find<'a>(
         .ok_or_else(|| err(analysis, format!("probe `{probe}` recorded nothing")))
 }
 
-/// c_D and c_L = 2 F / (ρ U² D), averaged over the last `window_s` of the run.
+/// The statistics of a force or grain probe's coefficients c_D and c_L = 2 F / (ρ U² D)
+/// over the last `window_s` of the run (the last sample only when 0), as the Schäfer & Turek
+/// (1996) benchmarks define them:
+/// - `<probe>.drag_coefficient`, `<probe>.lift_coefficient`: the means;
+/// - `..._max`, `..._min` of each;
+/// - `<probe>.lift_amplitude`: half the peak-to-peak of c_L;
+/// - `<probe>.lift_strouhal`: St = f D / U from the dominant frequency f of c_L (FFT, as
+///   [`dominant_frequency`]), 0 when c_L does not oscillate (amplitude below 10⁻⁴ of the
+///   mean |c_D|) or the window holds fewer than 16 samples.
 pub fn force_coefficients(
     inp: &Inputs,
     probe: &str,
@@ -31,15 +39,92 @@ pub fn force_coefficients(
     let rows: Vec<usize> = (0..s.len())
         .filter(|&i| s.times[i] >= t_end - window_s)
         .collect();
-    let mean = |c: usize| {
-        rows.iter()
-            .map(|&i| s.values[i * s.columns.len() + c])
-            .sum::<f64>()
-            / rows.len() as f64
-    };
     let q = 0.5 * inp.scene.scene.fluid.density_kg_m3 * u * u * d;
-    r.insert(format!("{probe}.drag_coefficient"), mean(0) / q);
-    r.insert(format!("{probe}.lift_coefficient"), mean(1) / q);
+    let coefficient = |name: &str| -> Result<Vec<f64>, AnalysisError> {
+        let c = s.column_index(name).ok_or_else(|| {
+            err(
+                "force-coefficients",
+                format!("probe `{probe}` records no force"),
+            )
+        })?;
+        Ok(rows
+            .iter()
+            .map(|&i| s.values[i * s.columns.len() + c] / q)
+            .collect())
+    };
+    let (drag, lift) = (coefficient("fx_n_per_m")?, coefficient("fy_n_per_m")?);
+    let stats = |v: &[f64]| {
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        (mean, lo, hi)
+    };
+    let (cd, cd_lo, cd_hi) = stats(&drag);
+    let (cl, cl_lo, cl_hi) = stats(&lift);
+    let amplitude = 0.5 * (cl_hi - cl_lo);
+    let oscillates = lift.len() >= 16 && amplitude > 1e-4 * cd.abs();
+    let strouhal = if oscillates {
+        let dt = (s.times[rows[rows.len() - 1]] - s.times[rows[0]]) / (rows.len() - 1) as f64;
+        dominant_frequency(&lift, dt).0 * d / u
+    } else {
+        0.0
+    };
+    for (name, v) in [
+        ("drag_coefficient", cd),
+        ("drag_coefficient_min", cd_lo),
+        ("drag_coefficient_max", cd_hi),
+        ("lift_coefficient", cl),
+        ("lift_coefficient_min", cl_lo),
+        ("lift_coefficient_max", cl_hi),
+        ("lift_amplitude", amplitude),
+        ("lift_strouhal", strouhal),
+    ] {
+        r.insert(format!("{probe}.{name}"), v);
+    }
+    Ok(())
+}
+
+/// The results of a force-coefficients analysis, after `<probe>.`.
+pub const FORCE_QUANTITIES: [&str; 8] = [
+    "drag_coefficient",
+    "drag_coefficient_min",
+    "drag_coefficient_max",
+    "lift_coefficient",
+    "lift_coefficient_min",
+    "lift_coefficient_max",
+    "lift_amplitude",
+    "lift_strouhal",
+];
+
+/// p(upstream) − p(downstream) of two point probes (Pa), averaged over the samples of the
+/// last `window_s` (the last sample when 0).
+pub fn pressure_difference(
+    inp: &Inputs,
+    upstream: &str,
+    downstream: &str,
+    window_s: f64,
+    r: &mut Results,
+) -> Result<(), AnalysisError> {
+    const NAME: &str = "pressure-difference";
+    let (a, b) = (find(inp, upstream, NAME)?, find(inp, downstream, NAME)?);
+    let pressure = |s: &Series| -> Result<Vec<(f64, f64)>, AnalysisError> {
+        let c = s
+            .column_index("pressure_pa")
+            .ok_or_else(|| err(NAME, format!("probe `{}` records no pressure", s.name)))?;
+        let t_end = *s.times.last().expect("non-empty");
+        Ok((0..s.len())
+            .filter(|&i| s.times[i] >= t_end - window_s)
+            .map(|i| (s.times[i], s.values[i * s.columns.len() + c]))
+            .collect())
+    };
+    let (pa, pb) = (pressure(a)?, pressure(b)?);
+    // Both probes are sampled at the same steps.
+    let n = pa.len().min(pb.len());
+    let mean = (0..n).map(|i| pa[i].1 - pb[i].1).sum::<f64>() / n as f64;
+    r.insert(format!("{upstream}.pressure_difference_pa"), mean);
     Ok(())
 }
 

@@ -90,15 +90,44 @@ fn validate_analysis(
             length_m,
             ..
         } => {
-            if !matches!(probe_kind(probe), Some(Probe::Force { .. })) {
+            if !matches!(
+                probe_kind(probe),
+                Some(Probe::Force { .. } | Probe::Grain { .. })
+            ) {
                 return Err(ctx.err(
                     "probe",
                     0,
-                    format!("force-coefficients needs a force probe named `{probe}`"),
+                    format!(
+                        "force-coefficients needs a force probe (an obstacle) or a grain probe \
+                         named `{probe}`"
+                    ),
                 ));
             }
             positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
             positive(ctx, "length_m", *length_m, "the reference length")?;
+        }
+        Analysis::PressureDifference {
+            upstream,
+            downstream,
+            average_last_s,
+        } => {
+            for (key, p) in [("upstream", upstream), ("downstream", downstream)] {
+                if !matches!(probe_kind(p), Some(Probe::Point { .. })) {
+                    return Err(ctx.err(
+                        key,
+                        0,
+                        format!("pressure-difference needs a point probe named `{p}`"),
+                    ));
+                }
+            }
+            if !(*average_last_s >= 0.0) {
+                return Err(ctx.err(
+                    "average_last_s",
+                    0,
+                    format!("the window must be 0 or positive, got {average_last_s}"),
+                ));
+            }
+            within_run(ctx, *average_last_s, run_end_s)?;
         }
         Analysis::Strouhal {
             probe,

@@ -363,7 +363,9 @@ pub enum Signal {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum Probe {
-    /// Velocity and pressure at a point (nearest cell centre).
+    /// Velocity and pressure at a point: bilinear interpolation between the centres of the
+    /// four cells around it, over those that are fluid (weights renormalised), so a point
+    /// on an obstacle's surface reads the fluid beside it.
     Point {
         /// Name (unique).
         name: String,
@@ -432,16 +434,20 @@ pub enum Analysis {
         /// Column of the CSVs to compare with.
         column: String,
     },
-    /// Drag and lift coefficients from a force probe, averaged over the last
-    /// `average_last_s`: `<probe>.drag_coefficient`, `<probe>.lift_coefficient`.
+    /// Drag and lift coefficients c = 2F/(ρ U² D) from a force or grain probe over the last
+    /// `average_last_s` (as the Schäfer & Turek benchmarks define them): the means
+    /// `<probe>.drag_coefficient` and `<probe>.lift_coefficient`, their extremes
+    /// (`..._min`, `..._max`), `<probe>.lift_amplitude` (half the peak-to-peak of c_L) and
+    /// `<probe>.lift_strouhal` (f D / U of the lift's dominant frequency; 0 when it does not
+    /// oscillate).
     ForceCoefficients {
-        /// Force probe.
+        /// Force probe (an obstacle's) or grain probe.
         probe: String,
         /// U in c = 2F/(ρ U² D) (m/s).
         velocity_m_s: f64,
         /// D (m).
         length_m: f64,
-        /// Averaging window at the end of the run (s).
+        /// Window at the end of the run (s); 0 (the default): the last sample only.
         #[serde(default)]
         average_last_s: f64,
     },
@@ -461,6 +467,19 @@ pub enum Analysis {
         length_m: f64,
         /// Transient to discard (s).
         skip_s: f64,
+    },
+    /// Mean pressure difference between two point probes over the last `average_last_s`:
+    /// `<upstream>.pressure_difference_pa` = p(upstream) − p(downstream) (Schäfer & Turek's
+    /// ΔP, with probes on the obstacle's surface: a point probe interpolates the fluid cells
+    /// around it).
+    PressureDifference {
+        /// Point probe whose pressure is taken first.
+        upstream: String,
+        /// Point probe whose pressure is subtracted.
+        downstream: String,
+        /// Window at the end of the run (s); 0 (the default): the last sample only.
+        #[serde(default)]
+        average_last_s: f64,
     },
     /// Relative change of the total fluid mass over the run: `mass.relative_drift`.
     MassDrift,
