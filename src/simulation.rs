@@ -541,7 +541,9 @@ impl<T: Real> Simulation<T> {
     /// Velocity (m/s) and pressure (Pa) at every point probe (by target index; zero for
     /// other targets): each rank samples the corner cells it owns, and every rank sums each
     /// probe's corners in their fixed order, so the values have the same bits on any rank
-    /// count. Collective.
+    /// count. In a coupled run, corners whose centre lies inside a grain (as the fluid sees
+    /// it) are left out and the weights renormalised over the others, unless every corner is
+    /// covered. Collective.
     fn sample_points(&mut self, comm: &dyn Comm) -> Vec<[f64; 3]> {
         let (x0, nx) = (self.fluid.lattice().x_offset(), self.fluid.lattice().nx());
         let mut tags = Vec::new();
@@ -556,11 +558,35 @@ impl<T: Real> Simulation<T> {
                 }
             }
         }
-        let mut mine = Vec::with_capacity(5 * cells.len());
-        for ((k, j), (rho, u)) in tags.into_iter().zip(self.fluid.sample(&cells)) {
+        let dx = self.units.dx_m;
+        let covered = match &self.grains {
+            Some(c) => {
+                let centres: Vec<[f64; 2]> = cells
+                    .iter()
+                    .map(|&(x, y)| [((x + x0) as f64 + 0.5) * dx, (y as f64 + 0.5) * dx])
+                    .collect();
+                c.covers(&centres)
+            }
+            None => vec![false; cells.len()],
+        };
+        let mut mine = Vec::with_capacity(6 * cells.len());
+        let mut sampled = self.fluid.sample(&cells);
+        let corners: std::collections::HashSet<(usize, usize)> = cells.iter().copied().collect();
+        let links: std::collections::HashMap<(usize, usize), (f64, [f64; 2])> = self
+            .link_cell_moments(Some(&corners))
+            .into_iter()
+            .map(|(x, y, rho, u)| ((x, y), (rho, u)))
+            .collect();
+        for (cell, value) in cells.iter().zip(sampled.iter_mut()) {
+            if let Some(v) = links.get(cell) {
+                *value = *v;
+            }
+        }
+        for (((k, j), (rho, u)), cov) in tags.into_iter().zip(sampled).zip(covered) {
             mine.extend([
                 k as f64,
                 j as f64,
+                cov as u8 as f64,
                 self.units.velocity_to_si(u[0]),
                 self.units.velocity_to_si(u[1]),
                 self.units.drho_to_pressure(rho - 1.0),
@@ -568,16 +594,19 @@ impl<T: Real> Simulation<T> {
         }
         let all = comm.all_gather_f64(&mine);
         let mut values = vec![Vec::new(); self.targets.len()];
-        for r in all.chunks_exact(5) {
-            values[r[0] as usize].push((r[1] as usize, [r[2], r[3], r[4]]));
+        for r in all.chunks_exact(6) {
+            values[r[0] as usize].push((r[1] as usize, r[2] != 0.0, [r[3], r[4], r[5]]));
         }
         let mut point = vec![[0.0; 3]; self.targets.len()];
         for (k, target) in self.targets.iter().enumerate() {
             if let ProbeTarget::Point(corners) = target {
                 values[k].sort_by_key(|v| v.0);
-                for (j, v) in &values[k] {
+                let open = values[k].iter().any(|v| !v.1);
+                let used: Vec<_> = values[k].iter().filter(|v| !open || !v.1).collect();
+                let total: f64 = used.iter().map(|v| corners[v.0].2).sum();
+                for v in used {
                     for c in 0..3 {
-                        point[k][c] += corners[*j].2 * v[c];
+                        point[k][c] += corners[v.0].2 / total * v.2[c];
                     }
                 }
             }
@@ -589,7 +618,51 @@ impl<T: Real> Simulation<T> {
     /// under bounce-back grains at rest at their velocity). Collective.
     pub fn fields(&mut self, comm: &dyn Comm) -> Fields {
         self.show_grains();
-        self.fluid.fields(comm)
+        let mut f = self.fluid.fields(comm);
+        for (x, y, rho, u) in self.link_cell_moments(None) {
+            let k = y * f.nx + x;
+            (f.rho[k], f.ux[k], f.uy[k]) = (rho, u[0], u[1]);
+        }
+        f
+    }
+
+    /// Density and velocity (lattice units) of the fluid cells next to bounce-back grains,
+    /// by local cell (x, y), from their own values: a plain read of such a cell pulls the
+    /// rest fill under the grain instead of the bounce-back populations the sweep gives it.
+    /// The collision keeps ρ and adds F to the momentum (Guo forcing), so from the
+    /// post-collision values ρ = 1 + Σ h_i and u = (Σ h_i c_i − F/2) / ρ (Guo, Zheng & Shi
+    /// 2002, eq. 10). Only the cells `wanted` keeps (all when `None`); empty for a fluid run
+    /// or partially saturated cells.
+    fn link_cell_moments(
+        &mut self,
+        wanted: Option<&std::collections::HashSet<(usize, usize)>>,
+    ) -> Vec<(usize, usize, f64, [f64; 2])> {
+        let Some(c) = &self.grains else {
+            return Vec::new();
+        };
+        let stride = self.fluid.lattice().stride();
+        let local = |k: u32| (k as usize % stride - 1, k as usize / stride - 1);
+        let cells: Vec<u32> = c
+            .coupler()
+            .link_cells()
+            .iter()
+            .copied()
+            .filter(|&k| wanted.is_none_or(|w| w.contains(&local(k))))
+            .collect();
+        if cells.is_empty() {
+            return Vec::new();
+        }
+        let force = self.fluid.lattice().body_force();
+        let own = self.fluid.whole_cells(&cells);
+        cells
+            .iter()
+            .zip(own)
+            .map(|(&k, h)| {
+                let m = lbm::collision::moments(&h, [-force[0], -force[1]]);
+                let (x, y) = local(k);
+                (x, y, m.rho, [m.ux, m.uy])
+            })
+            .collect()
     }
 
     /// Before fields or probes are read: the fluid under bounce-back grains at rest at

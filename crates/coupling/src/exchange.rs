@@ -129,6 +129,12 @@ impl Coupler {
         self.cells.counts()
     }
 
+    /// The fluid cells next to bounce-back grains (padded), as the last exchange planned
+    /// them; none with partially saturated cells.
+    pub fn link_cells(&self) -> &[u32] {
+        self.cells.link_cells()
+    }
+
     /// Solid fraction of every interior cell (padded index → Σ ε, capped at 1).
     pub fn solid_fraction(&self, out: &mut [f64]) {
         out.fill(0.0);

@@ -140,6 +140,16 @@ pub(super) enum Cells {
 }
 
 impl Cells {
+    /// The link plan's cells (padded) of the last exchange; none with partially saturated
+    /// cells.
+    pub(crate) fn link_cells(&self) -> &[u32] {
+        match self {
+            Cells::BounceBack(l) => &l.links.cells,
+            Cells::Interpolated(l) => &l.links.cells,
+            Cells::Partial(_) => &[],
+        }
+    }
+
     /// The scheme's cells on slab `frame`.
     pub(super) fn new(scheme: Scheme, refill: Refill, frame: SlabFrame) -> Self {
         match scheme {

@@ -1,6 +1,7 @@
 //! The fluid solver behind one coarse trait, so that the device that runs it (rayon on
 //! the CPU, wgpu on a GPU) is chosen at run time. Precision stays a type parameter.
 
+use super::d2q9::Q;
 use super::fields::Fields;
 use super::lattice::{Lattice, StepError};
 use super::moving::{MovingCells, PlanKind, Refill};
@@ -48,6 +49,9 @@ pub trait FluidBackend<T: Real> {
     fn set_rest(&mut self, cells: &[u32], velocity: &[[f64; 2]]);
     /// Σ h_i c_i of each cell of the current state.
     fn momentum_of_cells(&mut self, cells: &[u32], out: &mut Vec<[f64; 2]>);
+    /// The nine own values (post-collision, shifted: f_i − w_i) of each of `cells` (padded
+    /// interior cells) in the current state.
+    fn whole_cells(&mut self, cells: &[u32]) -> Vec<[f64; Q]>;
     /// Rebuild cells a surface has uncovered; the momentum of each new cell.
     fn apply_refills(&mut self, refills: &[Refill], momentum: &mut Vec<[f64; 2]>);
     /// Scale every Zou–He velocity face from the next step on (start-up ramps).
@@ -102,6 +106,10 @@ impl<T: Real> FluidBackend<T> for Lattice<T> {
     fn momentum_of_cells(&mut self, cells: &[u32], out: &mut Vec<[f64; 2]>) {
         Lattice::momentum_of_cells(self, cells, out)
     }
+    fn whole_cells(&mut self, cells: &[u32]) -> Vec<[f64; Q]> {
+        cells.iter().map(|&k| self.whole_cell(k as usize)).collect()
+    }
+
     fn apply_refills(&mut self, refills: &[Refill], momentum: &mut Vec<[f64; 2]>) {
         Lattice::apply_refills(self, refills, momentum)
     }

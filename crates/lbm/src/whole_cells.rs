@@ -75,7 +75,7 @@ impl<T: Real> Lattice<T> {
 
     /// All nine post-collision values of padded cell `m` (halo cells included) in the
     /// current state.
-    fn whole_cell(&self, m: usize) -> [f64; Q] {
+    pub(crate) fn whole_cell(&self, m: usize) -> [f64; Q] {
         if !self.in_place() {
             // Two arrays: the halo cells hold whole cells after the refreshes.
             let buf = &self.buf[self.cur];

@@ -107,6 +107,22 @@ impl LbmDem {
         (all.len() >= 7).then(|| std::array::from_fn(|k| all[k]))
     }
 
+    /// Whether each point (m) lies inside a grain as the fluid sees it (radius r_h), among
+    /// the grains this rank holds (owned and ghosts: every grain over this rank's slab).
+    pub fn covers(&self, points: &[[f64; 2]]) -> Vec<bool> {
+        let g = &self.dem.system.grains;
+        let k = self.hydro_ratio;
+        points
+            .iter()
+            .map(|p| {
+                (0..g.len()).any(|i| {
+                    let (dx, dy, r) = (p[0] - g.x[i], p[1] - g.y[i], k * g.r[i]);
+                    dx * dx + dy * dy < r * r
+                })
+            })
+            .collect()
+    }
+
     /// Walls of the DEM (the scene's, then one per wall face of the fluid).
     pub fn wall_count(&self) -> usize {
         self.dem.system.walls.len()

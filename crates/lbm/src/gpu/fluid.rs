@@ -414,6 +414,13 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         self.cell_momenta(cells, out)
     }
 
+    fn whole_cells(&mut self, cells: &[u32]) -> Vec<[f64; Q]> {
+        self.gather(cells)
+            .chunks_exact(Q)
+            .map(|c| std::array::from_fn(|i| c[i].to_f64()))
+            .collect()
+    }
+
     fn apply_refills(&mut self, refills: &[crate::moving::Refill], momentum: &mut Vec<[f64; 2]>) {
         self.refills(refills, momentum)
     }
