@@ -77,7 +77,14 @@ fn good_scene_runs() {
 #[test]
 fn unknown_key_names_key_and_line() {
     let s = GOOD.replace("spacing_m = 0.01", "spacing_m = 0.01\nspacing_mm = 10");
-    expect_error(&s, &["unknown field `spacing_mm`", "line 5"]);
+    expect_error(
+        &s,
+        &[
+            "scene.toml:5",
+            "`domain.spacing_mm`",
+            "unknown field `spacing_mm`",
+        ],
+    );
 }
 
 #[test]
@@ -88,7 +95,8 @@ fn unknown_variant_is_rejected_at_parse_time() {
         &[
             "unknown variant `f16`",
             "expected `f32` or `f64`",
-            "line 21",
+            "scene.toml:21",
+            "`run.precision`",
         ],
     );
 }

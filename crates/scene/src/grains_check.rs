@@ -38,10 +38,7 @@ pub fn grain_result_names(s: &GrainScene) -> Vec<String> {
 /// Parse and validate a grains scene.
 pub fn parse_grains(text: &str, path: &Path) -> Result<ValidGrainScene, SceneError> {
     super::screen_raw(text, path)?;
-    let scene: GrainScene = toml::from_str(text).map_err(|e| SceneError::Parse {
-        path: path.to_owned(),
-        message: e.to_string().trim_end().to_string(),
-    })?;
+    let scene: GrainScene = super::locate::strict(text, path)?;
     super::unknown::refuse_ignored(text, &scene, path)?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let ctx = Context {

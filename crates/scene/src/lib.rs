@@ -12,6 +12,7 @@ mod grains;
 mod grains_check;
 mod legacy;
 pub mod limits;
+mod locate;
 mod mpm;
 mod mpm_check;
 mod mpm_material_check;
@@ -175,10 +176,7 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
 /// Parse and validate scene text; `path` is used in messages and to resolve relative files.
 pub fn parse(text: &str, path: &Path) -> Result<ValidScene, SceneError> {
     screen_raw(text, path)?;
-    let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
-        path: path.to_owned(),
-        message: e.to_string().trim_end().to_string(),
-    })?;
+    let scene: Scene = locate::strict(text, path)?;
     unknown::refuse_ignored(text, &scene, path)?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let ctx = context::Context {

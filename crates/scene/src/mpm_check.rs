@@ -61,10 +61,7 @@ impl ValidMpmScene {
 /// Parse and validate an MPM scene.
 pub fn parse_mpm(text: &str, path: &Path) -> Result<ValidMpmScene, SceneError> {
     super::screen_raw(text, path)?;
-    let scene: MpmScene = toml::from_str(text).map_err(|e| SceneError::Parse {
-        path: path.to_owned(),
-        message: e.to_string().trim_end().to_string(),
-    })?;
+    let scene: MpmScene = super::locate::strict(text, path)?;
     super::unknown::refuse_ignored(text, &scene, path)?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let ctx = Context {
