@@ -75,3 +75,32 @@ fn rectangular_obstacle() {
     assert_checks_pass(&s);
     assert!(d.path().join("pictures/speed_00018750.png").is_file());
 }
+
+/// The convergence study's script (`jobs/cylinder/convergence.py`) runs at D = 10 and 20
+/// cells for the staircase and the curved wall and tabulates them with their order; the
+/// curved wall's drag lies closer to the benchmark at both resolutions.
+#[test]
+fn cylinder_convergence_script_runs() {
+    let out = tempfile::tempdir().unwrap();
+    let o = std::process::Command::new("python3")
+        .arg(root().join("jobs/cylinder/convergence.py"))
+        .args(["--out", out.path().to_str().unwrap()])
+        .args(["--bin", env!("CARGO_BIN_EXE_grainflow")])
+        .args(["--threads", "1", "--cells", "10,20"])
+        .args(["--walls", "staircase,interpolated"])
+        .output()
+        .expect("python3 runs");
+    println!("{}", String::from_utf8_lossy(&o.stdout));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: Vec<Vec<String>> = std::fs::read_to_string(out.path().join("results.csv"))
+        .unwrap()
+        .lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let col = |name: &str| rows[0].iter().position(|c| c == name).unwrap();
+    let e = |r: usize| rows[r][col("e_c_D")].parse::<f64>().unwrap().abs();
+    // Rows: staircase 10, 20; interpolated 10, 20.
+    assert!(e(3) < e(1) && e(4) < e(2), "{rows:?}");
+    let table = std::fs::read_to_string(out.path().join("results.md")).unwrap();
+    assert!(table.contains("| interpolated | 20 |") && table.contains("(p = "));
+}

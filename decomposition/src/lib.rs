@@ -14,6 +14,7 @@
 //!   the f64 words of a message (and of a checkpoint row), and back.
 
 mod comm;
+mod exact_sum;
 mod halo;
 mod mpi_comm;
 mod neighbours;
@@ -21,6 +22,7 @@ mod pack;
 mod slab;
 
 pub use comm::{ordered_sum, Comm, Incoming, Outgoing, SingleProcess};
+pub use exact_sum::reproducible_sums;
 pub use halo::{Side, SlabHalo};
 pub use mpi_comm::{launched_by_mpi, MpiComm, RawComm};
 pub use neighbours::{swap_neighbours, swap_neighbours_varlen};

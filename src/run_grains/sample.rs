@@ -2,8 +2,8 @@
 //! or loaded, spread over the ranks' slabs; and the collective gathers of its state.
 
 use crate::error::RunError;
-use decomposition::Comm;
 use decomposition::PackRows;
+use decomposition::{reproducible_sums, Comm};
 use dem::parallel::balanced_bounds;
 use dem::sample::{load_csv, random_sequential_addition};
 use dem::{DemError, DemSystem, Grains, SlabDem};
@@ -25,17 +25,27 @@ pub fn gather_grains(sys: &DemSystem, comm: &dyn Comm) -> Grains {
     g
 }
 
-/// Global sums of kinetic energy, momentum and grain count (collective).
+/// Global sums of kinetic energy, momentum and grain count, the same bits whatever the
+/// grains' storage order (a restart reorders them) and rank count (collective).
 pub(super) fn global_state(d: &SlabDem, comm: &dyn Comm) -> (f64, [f64; 2], f64) {
-    let p = d.system.grains.momentum_of(d.system.owned());
-    let mut v = [
-        d.system.owned_kinetic_energy(),
-        p[0],
-        p[1],
-        d.system.owned() as f64,
+    let g = &d.system.grains;
+    let n = d.system.owned();
+    let mut columns = [
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
     ];
-    comm.sum_f64(&mut v);
-    (v[0], [v[1], v[2]], v[3])
+    for i in 0..n {
+        let ke = g.kinetic_energy_of_grain(i);
+        columns[0].push(ke);
+        columns[1].push(g.m[i] * g.vx[i]);
+        columns[2].push(g.m[i] * g.vy[i]);
+    }
+    let refs: Vec<&[f64]> = columns.iter().map(|c| c.as_slice()).collect();
+    let s = reproducible_sums(&refs, comm);
+    let mut count = [n as f64];
+    comm.sum_f64(&mut count);
+    (s[0], [s[1], s[2]], count[0])
 }
 
 /// Prepare the sample of `scene` (identical on every rank; settling runs distributed).

@@ -80,16 +80,17 @@ impl Grains {
 
     /// Kinetic energy of the first `n` grains (J/m).
     pub fn kinetic_energy_of(&self, n: usize) -> f64 {
-        (0..n)
-            .map(|i| {
-                let rot = if self.inv_inertia[i] > 0.0 {
-                    0.5 * self.omega[i] * self.omega[i] / self.inv_inertia[i]
-                } else {
-                    0.0
-                };
-                0.5 * self.m[i] * (self.vx[i] * self.vx[i] + self.vy[i] * self.vy[i]) + rot
-            })
-            .sum()
+        (0..n).map(|i| self.kinetic_energy_of_grain(i)).sum()
+    }
+
+    /// Kinetic energy of grain `i`, translational plus rotational (J/m).
+    pub fn kinetic_energy_of_grain(&self, i: usize) -> f64 {
+        let rot = if self.inv_inertia[i] > 0.0 {
+            0.5 * self.omega[i] * self.omega[i] / self.inv_inertia[i]
+        } else {
+            0.0
+        };
+        0.5 * self.m[i] * (self.vx[i] * self.vx[i] + self.vy[i] * self.vy[i]) + rot
     }
 
     /// Reorder the first `order.len()` grains so that new grain k is old grain `order[k]`;
