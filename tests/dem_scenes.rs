@@ -85,6 +85,33 @@ solid_fraction = 0.4
 end_time_s = 0.01
 "#;
 
+/// `check` warns when gravity pulls the grains towards no wall (they would all fall out of
+/// the domain), and not once a floor is under them.
+#[test]
+fn check_warns_of_grains_with_no_floor() {
+    let check = |scene: &str| {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("s.toml");
+        std::fs::write(&path, scene).unwrap();
+        let o = Command::new(BIN).arg("check").arg(&path).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    };
+    let open = check(GOOD);
+    assert!(open.contains("towards no wall"), "{open}");
+    let floor = GOOD.replace(
+        "[run]",
+        "[[grains.walls]]\nname = \"floor\"\nfrom_m = [-0.01, 0.0]\nto_m = [0.11, 0.0]\n\
+         friction = 0.5\n\n[run]",
+    );
+    let closed = check(&floor);
+    assert!(!closed.contains("towards no wall"), "{closed}");
+}
+
 #[test]
 fn bad_grains_scenes_name_the_field() {
     let o = Command::new(BIN)

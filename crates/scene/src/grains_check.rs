@@ -116,7 +116,6 @@ pub(super) fn rectangle(
 
 /// Validate a grains scene section by section; returns its warnings.
 pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, SceneError> {
-    let warnings = Vec::new();
     super::output::validate_grain_domain(&s.domain, ctx)?;
     let g = &s.grains;
     validate_material(g, ctx)?;
@@ -124,7 +123,70 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
     validate_sample(g, s.domain.size(), ctx)?;
     validate_walls(g, ctx)?;
     validate_run_and_checks(s, ctx)?;
-    Ok(warnings)
+    Ok(no_floor(g).into_iter().collect())
+}
+
+/// A warning when gravity pulls the sample (its packing rectangle, or its listed grains)
+/// towards no wall and no fixed grain: every grain would fall out of the domain. Nothing
+/// for a CSV sample (its extent is known only once read) or without gravity.
+fn no_floor(g: &GrainsSpec) -> Option<String> {
+    let grav = g.gravity_m_s2;
+    let norm = grav[0].hypot(grav[1]);
+    if norm == 0.0 {
+        return None;
+    }
+    let down = [grav[0] / norm, grav[1] / norm];
+    let across = [-down[1], down[0]];
+    let (points, fixed): (Vec<[f64; 2]>, Vec<[f64; 3]>) = match &g.sample {
+        SampleSpec::Pack { min_m, max_m, .. } => (
+            vec![*min_m, *max_m, [min_m[0], max_m[1]], [max_m[0], min_m[1]]],
+            Vec::new(),
+        ),
+        SampleSpec::List { grains } => (
+            grains
+                .iter()
+                .filter(|l| !l.fixed)
+                .flat_map(|l| {
+                    let (p, r) = (l.position_m, l.radius_m);
+                    [[p[0] - r, p[1] - r], [p[0] + r, p[1] + r]]
+                })
+                .collect(),
+            grains
+                .iter()
+                .filter(|l| l.fixed)
+                .map(|l| [l.position_m[0], l.position_m[1], l.radius_m])
+                .collect(),
+        ),
+        SampleSpec::Csv { .. } => return None,
+    };
+    let dot = |p: [f64; 2], a: [f64; 2]| p[0] * a[0] + p[1] * a[1];
+    let range = |ps: &mut dyn Iterator<Item = f64>| {
+        ps.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        })
+    };
+    let (lo, hi) = range(&mut points.iter().map(|&p| dot(p, across)));
+    let (_, deepest) = range(&mut points.iter().map(|&p| dot(p, down)));
+    if !lo.is_finite() {
+        return None;
+    }
+    // Something below the sample (further along gravity) that overlaps it across gravity.
+    let walls = g.walls.iter().any(|w| {
+        let (a, b) = (dot(w.from_m, across), dot(w.to_m, across));
+        let below = dot(w.from_m, down).max(dot(w.to_m, down)) >= deepest;
+        below && a.min(b) < hi && a.max(b) > lo
+    });
+    let grains = fixed.iter().any(|f| {
+        let (c, r) = ([f[0], f[1]], f[2]);
+        dot(c, down) + r >= deepest && dot(c, across) + r >= lo && dot(c, across) - r <= hi
+    });
+    (!walls && !grains).then(|| {
+        format!(
+            "gravity [{}, {}] m/s² pulls the grains towards no wall and no fixed grain: they \
+             will fall out of the domain. Add a floor under the sample to `[[grains.walls]]`",
+            grav[0], grav[1]
+        )
+    })
 }
 
 /// The grains' density, damping, gravity and `[grains.contact]`.

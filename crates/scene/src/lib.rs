@@ -159,15 +159,39 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
         (true, false) => Ok(AnyScene::Grains(Box::new(parse_grains(&text, path)?))),
         (true, true) => parse(&text, path)
             .map(|s| AnyScene::Fluid(Box::new(s)))
-            .map_err(|e| match e {
-                SceneError::Parse { path, message } => SceneError::Parse {
-                    path,
-                    message: format!(
-                        "{message}\n(a scene with [fluid] and [grains] runs coupled: it needs \
-                         [domain], [fluid], [boundaries], [run], [grains] and [coupling])"
-                    ),
-                },
-                other => other,
+            .map_err(|e| {
+                const HINT: &str = "\n(a scene with [fluid] and [grains] runs coupled: it \
+                                    needs [domain], [fluid], [boundaries], [run], [grains] and \
+                                    [coupling])";
+                match e {
+                    SceneError::Parse { path, message } => SceneError::Parse {
+                        path,
+                        message: format!("{message}{HINT}"),
+                    },
+                    // The strict parse's errors (the structure), not validation's.
+                    SceneError::Invalid {
+                        path,
+                        line,
+                        key,
+                        message,
+                    } if [
+                        "unknown field",
+                        "missing field",
+                        "invalid type",
+                        "unknown variant",
+                    ]
+                    .iter()
+                    .any(|p| message.starts_with(p)) =>
+                    {
+                        SceneError::Invalid {
+                            path,
+                            line,
+                            key,
+                            message: format!("{message}{HINT}"),
+                        }
+                    }
+                    other => other,
+                }
             }),
         _ => Ok(AnyScene::Fluid(Box::new(parse(&text, path)?))),
     }
