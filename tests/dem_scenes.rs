@@ -110,6 +110,10 @@ fn check_warns_of_grains_with_no_floor() {
     );
     let closed = check(&floor);
     assert!(!closed.contains("towards no wall"), "{closed}");
+    // In a coupled scene the fluid's wall faces hold the grains.
+    let settling = std::fs::read_to_string(root().join("jobs/settling/disk-16.toml")).unwrap();
+    let coupled = check(&settling);
+    assert!(!coupled.contains("towards no wall"), "{coupled}");
 }
 
 #[test]

@@ -175,6 +175,31 @@ pub(super) fn validate(
             ));
         }
     }
+    // The fluid's faces are walls for the grains too: the face gravity points to may be the
+    // floor (or periodic: the grains then fall through it and come back).
+    let g = spec.gravity_m_s2;
+    let b = &scene.boundaries;
+    let below = if g[1].abs() >= g[0].abs() {
+        if g[1] < 0.0 {
+            &b.south
+        } else {
+            &b.north
+        }
+    } else if g[0] < 0.0 {
+        &b.west
+    } else {
+        &b.east
+    };
+    let floor_face = matches!(
+        below,
+        BoundarySpec::Wall
+            | BoundarySpec::MovingWall { .. }
+            | BoundarySpec::FreeSlip
+            | BoundarySpec::Periodic
+    );
+    if !floor_face {
+        warnings.extend(super::grains_check::no_floor(spec));
+    }
     if !scene.obstacles.is_empty() {
         warnings.push(
             "grains do not collide with obstacles (only with [[grains.walls]] and the fluid's \

@@ -46,7 +46,8 @@ pub fn parse_grains(text: &str, path: &Path) -> Result<ValidGrainScene, SceneErr
         path,
         base_dir: &base_dir,
     };
-    let warnings = validate(&scene, &ctx)?;
+    let mut warnings = validate(&scene, &ctx)?;
+    warnings.extend(no_floor(&scene.grains));
     Ok(ValidGrainScene {
         scene,
         warnings,
@@ -123,13 +124,13 @@ pub(super) fn validate(s: &GrainScene, ctx: &Context) -> Result<Vec<String>, Sce
     validate_sample(g, s.domain.size(), ctx)?;
     validate_walls(g, ctx)?;
     validate_run_and_checks(s, ctx)?;
-    Ok(no_floor(g).into_iter().collect())
+    Ok(Vec::new())
 }
 
 /// A warning when gravity pulls the sample (its packing rectangle, or its listed grains)
 /// towards no wall and no fixed grain: every grain would fall out of the domain. Nothing
 /// for a CSV sample (its extent is known only once read) or without gravity.
-fn no_floor(g: &GrainsSpec) -> Option<String> {
+pub(super) fn no_floor(g: &GrainsSpec) -> Option<String> {
     let grav = g.gravity_m_s2;
     let norm = grav[0].hypot(grav[1]);
     if norm == 0.0 {
