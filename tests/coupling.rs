@@ -491,3 +491,25 @@ fn coupled_results_do_not_depend_on_the_thread_count() {
         );
     }
 }
+
+/// `check` warns when the grains may outrun the lattice: the settling disk made of glass
+/// under full gravity (ρ_s = 2500 kg/m³, g = 9.81 m/s²) falls at about 0.2 m/s, twenty times
+/// the scene's reference velocity and past the lattice's speed of sound; the scene as
+/// shipped gives no such warning.
+#[test]
+fn grains_faster_than_the_lattice_allows_are_warned_of() {
+    let path = root().join("jobs/settling/disk-16.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let warned = |t: &str| {
+        let s = grainflow::scene::parse(t, &path).unwrap_or_else(|e| panic!("{e}"));
+        s.warnings.iter().any(|w| w.contains("grains may reach"))
+    };
+    assert!(!warned(&text));
+    let heavy = text
+        .replace("density_kg_m3 = 1500.0", "density_kg_m3 = 2500.0")
+        .replace(
+            "gravity_m_s2 = [0.0, -0.13317]",
+            "gravity_m_s2 = [0.0, -9.81]",
+        );
+    assert!(warned(&heavy));
+}

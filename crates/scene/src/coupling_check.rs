@@ -175,6 +175,7 @@ pub(super) fn validate(
             ));
         }
     }
+    warnings.extend(speed_warning(scene, spec, units));
     // The fluid's faces are walls for the grains too: the face gravity points to may be the
     // floor (or periodic: the grains then fall through it and come back).
     let g = spec.gravity_m_s2;
@@ -221,4 +222,59 @@ pub(super) fn validate(
         );
     }
     Ok(warnings)
+}
+
+/// The speed the largest grain may reach (m/s): its terminal speed as a 2-D disk (White's
+/// cylinder drag C_D = 1 + 10 Re^(−2/3), U_t = √(π g d (ρ_s/ρ − 1) / (2 C_D))), or free fall
+/// under reduced gravity across the domain, √(2 g (1 − ρ/ρ_s) L), whichever is smaller.
+/// `None` without gravity or a known grain size.
+pub fn grain_speed_estimate(scene: &Scene, spec: &GrainsSpec) -> Option<f64> {
+    let g = spec.gravity_m_s2[0].hypot(spec.gravity_m_s2[1]);
+    let (_, r) = radius_range(&spec.sample)?;
+    if !(g > 0.0 && r > 0.0) {
+        return None;
+    }
+    let (rho, rho_s, nu) = (
+        scene.fluid.density_kg_m3,
+        spec.density_kg_m3,
+        scene.fluid.viscosity_m2_s,
+    );
+    let d = 2.0 * r;
+    let mut u = 1e-6f64;
+    for _ in 0..100 {
+        let re = (u * d / nu).max(1e-9);
+        let c_d = 1.0 + 10.0 * re.powf(-2.0 / 3.0);
+        u = (std::f64::consts::PI * g * d * (rho_s / rho - 1.0) / (2.0 * c_d)).sqrt();
+    }
+    let dm = &scene.domain;
+    let dir = [
+        spec.gravity_m_s2[0].abs() / g,
+        spec.gravity_m_s2[1].abs() / g,
+    ];
+    let length = (dm.cells[0] as f64 * dir[0] + dm.cells[1] as f64 * dir[1]) * dm.spacing_m;
+    let fall = (2.0 * g * (1.0 - rho / rho_s) * length).sqrt();
+    Some(u.min(fall))
+}
+
+/// A warning when the grains may move faster than the reference velocity the lattice was
+/// set for, by enough that the lattice Mach number passes 0.3 (the run stops as unstable
+/// once a grain reaches the speed of sound, 1/√3 cells per step).
+fn speed_warning(scene: &Scene, spec: &GrainsSpec, units: &Units) -> Option<String> {
+    let u = grain_speed_estimate(scene, spec)?;
+    let lattice = u * units.dt_s / units.dx_m;
+    let mach = lattice * 3f64.sqrt();
+    (mach > 0.3 && u > scene.fluid.reference_velocity_m_s).then(|| {
+        format!(
+            "the grains may reach about {u:.3e} m/s (terminal speed of the largest, or free fall \
+             across the domain), {lattice:.3} cells per step (Ma {mach:.2}), against \
+             reference_velocity_m_s = {}: expect large compressibility errors{}; set \
+             reference_velocity_m_s near {u:.2e}",
+            scene.fluid.reference_velocity_m_s,
+            if mach >= 1.0 {
+                ", and the run to stop when a grain passes the speed of sound"
+            } else {
+                ""
+            }
+        )
+    })
 }
