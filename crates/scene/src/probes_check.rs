@@ -83,6 +83,14 @@ fn validate_analysis(
     run_end_s: f64,
 ) -> Result<(), SceneError> {
     let probe_kind = |name: &str| s.probes.iter().find(|p| p.name() == name);
+    // `key` names a probe `name` of the kind `is` accepts, or the error says `needs`.
+    let need = |key: &str, name: &str, is: fn(&Probe) -> bool, needs: &str| {
+        if probe_kind(name).is_some_and(is) {
+            Ok(())
+        } else {
+            Err(ctx.err(key, 0, format!("{needs} `{name}`")))
+        }
+    };
     match a {
         Analysis::ForceCoefficients {
             probe,
@@ -90,19 +98,12 @@ fn validate_analysis(
             length_m,
             ..
         } => {
-            if !matches!(
-                probe_kind(probe),
-                Some(Probe::Force { .. } | Probe::Grain { .. })
-            ) {
-                return Err(ctx.err(
-                    "probe",
-                    0,
-                    format!(
-                        "force-coefficients needs a force probe (an obstacle) or a grain probe \
-                         named `{probe}`"
-                    ),
-                ));
-            }
+            need(
+                "probe",
+                probe,
+                |p| matches!(p, Probe::Force { .. } | Probe::Grain { .. }),
+                "force-coefficients needs a force probe (an obstacle) or a grain probe named",
+            )?;
             positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
             positive(ctx, "length_m", *length_m, "the reference length")?;
         }
@@ -112,13 +113,12 @@ fn validate_analysis(
             average_last_s,
         } => {
             for (key, p) in [("upstream", upstream), ("downstream", downstream)] {
-                if !matches!(probe_kind(p), Some(Probe::Point { .. })) {
-                    return Err(ctx.err(
-                        key,
-                        0,
-                        format!("pressure-difference needs a point probe named `{p}`"),
-                    ));
-                }
+                need(
+                    key,
+                    p,
+                    |p| matches!(p, Probe::Point { .. }),
+                    "pressure-difference needs a point probe named",
+                )?;
             }
             if !(*average_last_s >= 0.0) {
                 return Err(ctx.err(
@@ -136,13 +136,12 @@ fn validate_analysis(
             skip_s,
             ..
         } => {
-            if !matches!(probe_kind(probe), Some(Probe::Point { .. })) {
-                return Err(ctx.err(
-                    "probe",
-                    0,
-                    format!("strouhal needs a point probe named `{probe}`"),
-                ));
-            }
+            need(
+                "probe",
+                probe,
+                |p| matches!(p, Probe::Point { .. }),
+                "strouhal needs a point probe named",
+            )?;
             positive(ctx, "velocity_m_s", *velocity_m_s, "the reference velocity")?;
             positive(ctx, "length_m", *length_m, "the reference length")?;
             if *skip_s >= run_end_s {
@@ -160,13 +159,12 @@ fn validate_analysis(
             probe,
             average_last_s,
         } => {
-            if !matches!(probe_kind(probe), Some(Probe::Grain { .. })) {
-                return Err(ctx.err(
-                    "probe",
-                    0,
-                    format!("settling needs a grain probe named `{probe}`"),
-                ));
-            }
+            need(
+                "probe",
+                probe,
+                |p| matches!(p, Probe::Grain { .. }),
+                "settling needs a grain probe named",
+            )?;
             positive(
                 ctx,
                 "average_last_s",
@@ -184,13 +182,12 @@ fn validate_analysis(
             terminal_velocity_m_s,
         } => {
             for p in [lower, upper] {
-                if !matches!(probe_kind(p), Some(Probe::Grain { .. })) {
-                    return Err(ctx.err(
-                        "lower",
-                        0,
-                        format!("draft-kiss-tumble needs a grain probe named `{p}`"),
-                    ));
-                }
+                need(
+                    "lower",
+                    p,
+                    |p| matches!(p, Probe::Grain { .. }),
+                    "draft-kiss-tumble needs a grain probe named",
+                )?;
             }
             positive(ctx, "contact_gap_m", *contact_gap_m, "the contact gap")?;
             positive(
@@ -214,21 +211,19 @@ fn validate_analysis(
                     "column-collapse in a fluid scene needs grains: add [grains] and [coupling]",
                 ));
             }
-            if !matches!(probe_kind(deposit), Some(Probe::Deposit { .. })) {
-                return Err(ctx.err(
-                    "deposit",
-                    0,
-                    format!("column-collapse needs a deposit probe named `{deposit}`"),
-                ));
-            }
+            need(
+                "deposit",
+                deposit,
+                |p| matches!(p, Probe::Deposit { .. }),
+                "column-collapse needs a deposit probe named",
+            )?;
             if let Some(p) = pore_pressure {
-                if !matches!(probe_kind(p), Some(Probe::Point { .. })) {
-                    return Err(ctx.err(
-                        "pore_pressure",
-                        0,
-                        format!("column-collapse needs a point probe named `{p}`"),
-                    ));
-                }
+                need(
+                    "pore_pressure",
+                    p,
+                    |p| matches!(p, Probe::Point { .. }),
+                    "column-collapse needs a point probe named",
+                )?;
             }
         }
         Analysis::Permeability => permeability_scene(ctx, s)?,
