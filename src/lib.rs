@@ -20,6 +20,7 @@ pub use ::scene;
 pub use ::stability;
 
 pub mod budget;
+pub mod check;
 pub mod coupled;
 pub mod driver;
 pub mod error;

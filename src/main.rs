@@ -1,6 +1,5 @@
 //! The `grainflow` binary: parse the CLI, load the scene, run it. The only place that uses anyhow.
 
-mod check_cmd;
 mod cli;
 
 use anyhow::{Context, Result};
@@ -65,10 +64,26 @@ fn real_main() -> Result<i32> {
     match cli.command {
         Command::Info { threads } => info(threads),
         Command::Template { kind, out } => template(kind, out),
-        Command::Check { scene, ranks } => check_cmd::check(&scene, ranks),
+        Command::Check { scene, ranks } => check(&scene, ranks),
         Command::StabilityMap { out, threads } => stability_map(out, threads),
         Command::Run(args) => run(args),
     }
+}
+
+/// `grainflow check SCENE`: validate any kind of scene and print what a run will use; a
+/// run that `run` would refuse for its size (on `ranks` ranks) fails the check.
+fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
+    let any = grainflow::scene::load_any(scene)?;
+    let report = grainflow::check::assess(&any, ranks, grainflow::budget::machine_memory_bytes());
+    // What was assessed before a refusal is printed first, as it always was.
+    let (lines, outcome) = match report {
+        Ok(r) => (r.lines, Ok(r.code)),
+        Err(grainflow::check::Refused { lines, error }) => (lines, Err(error)),
+    };
+    for l in lines {
+        println!("{l}");
+    }
+    Ok(outcome?)
 }
 
 /// `grainflow info`: version, threads, ranks and the GPU adapters.

@@ -13,14 +13,14 @@ pub use super::balance::{balanced_columns, column_counts, MIN_COLUMNS, REBALANCE
 use super::error::MpmError;
 use super::system::MpmSystem;
 use super::transfer::{Strip, Q};
-use decomposition::{swap_neighbours_varlen, Comm};
+use decomposition::{reproducible_sums, swap_neighbours_varlen, Comm};
 use decomposition::{unpack_rows, PackRows};
 
 const TAG_STRIP: (u16, u16) = (300, 310);
 const TAG_MIGRATE: (u16, u16) = (320, 330);
 
-/// Totals over every rank, summed column by column in canonical order (the same bits on
-/// any rank count).
+/// Totals over every rank, summed exactly (`reproducible_sums`): the same bits on any rank
+/// count, in any storage order, and after a restart.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Totals {
     /// Number of points.
@@ -197,37 +197,32 @@ impl MpmSystem {
     /// canonical order and the columns are added in order.
     pub fn totals(&mut self, comm: &dyn Comm) -> Result<Totals, MpmError> {
         self.sort(comm, false)?;
-        let nx = self.setup.spec.nx;
-        let mut cols = vec![0.0; 5 * nx];
         let p = &self.points;
-        for c in self.own_columns() {
-            let mut acc = [0.0; 5];
-            for &i in &self.columns.order[self.columns.start[c]..self.columns.start[c + 1]] {
-                let i = i as usize;
-                let (m, v) = (p.mass[i], p.vel[i]);
-                acc[0] += 1.0;
-                acc[1] += m;
-                acc[2] += 0.5 * m * (v[0] * v[0] + v[1] * v[1]);
-                acc[3] += m * v[0];
-                acc[4] += m * v[1];
-            }
-            cols[5 * c..5 * c + 5].copy_from_slice(&acc);
-        }
-        comm.sum_f64(&mut cols);
-        let t = cols.chunks_exact(5).fold([0.0; 5], |a, c| {
-            [
-                a[0] + c[0],
-                a[1] + c[1],
-                a[2] + c[2],
-                a[3] + c[3],
-                a[4] + c[4],
-            ]
-        });
+        let own: Vec<usize> = self
+            .own_columns()
+            .flat_map(|c| {
+                self.columns.order[self.columns.start[c]..self.columns.start[c + 1]]
+                    .iter()
+                    .map(|&i| i as usize)
+            })
+            .collect();
+        let column = |f: &dyn Fn(usize) -> f64| own.iter().map(|&i| f(i)).collect::<Vec<f64>>();
+        let (m, v) = (&p.mass, &p.vel);
+        let cols = [
+            column(&|i| m[i]),
+            column(&|i| 0.5 * m[i] * (v[i][0] * v[i][0] + v[i][1] * v[i][1])),
+            column(&|i| m[i] * v[i][0]),
+            column(&|i| m[i] * v[i][1]),
+        ];
+        let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let t = reproducible_sums(&refs, comm);
+        let mut count = [own.len() as f64];
+        comm.sum_f64(&mut count);
         Ok(Totals {
-            points: t[0] as u64,
-            mass: t[1],
-            kinetic_energy: t[2],
-            momentum: [t[3], t[4]],
+            points: count[0] as u64,
+            mass: t[0],
+            kinetic_energy: t[1],
+            momentum: [t[2], t[3]],
         })
     }
 

@@ -133,11 +133,17 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
         path: path.to_owned(),
         source,
     })?;
-    let table: toml::Table = toml::from_str(&text).map_err(|e| SceneError::Parse {
+    parse_any(&text, path)
+}
+
+/// Parse and validate scene text of any kind (as [`load_any`] does a file); `path` is used
+/// in messages and to resolve relative files.
+pub fn parse_any(text: &str, path: &Path) -> Result<AnyScene, SceneError> {
+    let table: toml::Table = toml::from_str(text).map_err(|e| SceneError::Parse {
         path: path.to_owned(),
         message: e.to_string().trim_end().to_string(),
     })?;
-    legacy::check(&table, &text, path)?;
+    legacy::check(&table, text, path)?;
     if table.contains_key("mpm") {
         if let Some(other) = ["fluid", "grains"]
             .into_iter()
@@ -153,11 +159,11 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
                 ),
             });
         }
-        return Ok(AnyScene::Mpm(Box::new(parse_mpm(&text, path)?)));
+        return Ok(AnyScene::Mpm(Box::new(parse_mpm(text, path)?)));
     }
     match (table.contains_key("grains"), table.contains_key("fluid")) {
-        (true, false) => Ok(AnyScene::Grains(Box::new(parse_grains(&text, path)?))),
-        (true, true) => parse(&text, path)
+        (true, false) => Ok(AnyScene::Grains(Box::new(parse_grains(text, path)?))),
+        (true, true) => parse(text, path)
             .map(|s| AnyScene::Fluid(Box::new(s)))
             .map_err(|e| {
                 const HINT: &str = "\n(a scene with [fluid] and [grains] runs coupled: it \
@@ -193,7 +199,7 @@ pub fn load_any(path: &Path) -> Result<AnyScene, SceneError> {
                     other => other,
                 }
             }),
-        _ => Ok(AnyScene::Fluid(Box::new(parse(&text, path)?))),
+        _ => Ok(AnyScene::Fluid(Box::new(parse(text, path)?))),
     }
 }
 

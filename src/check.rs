@@ -1,24 +1,65 @@
-//! `grainflow check SCENE`: validate a scene of any kind and print what a run of it will use
-//! (lattice and units, steps, memory, the stability verdicts), refusing what `run` would
-//! refuse for its size.
+//! `grainflow check SCENE`: what a run of a validated scene of any kind will use (lattice
+//! and units, steps, memory, the stability verdicts), refusing what `run` would refuse for
+//! its size. The binary prints the report; the scene fuzzer runs the same assessment.
 
-use anyhow::Result;
-use grainflow::run::{step_count, Precision};
-use grainflow::scene;
-use grainflow::{budget, time_loop};
+use crate::error::RunError;
+use crate::run::{step_count, Precision};
+use crate::{budget, time_loop};
 
-/// `grainflow check SCENE`: validate any kind of scene and print what a run will use; a
-/// run that `run` would refuse for its size (on `ranks` ranks) fails the check.
-pub fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
-    let any = scene::load_any(scene)?;
-    let cost = match &any {
+/// A line of the report.
+macro_rules! say {
+    ($out:expr, $($t:tt)*) => { $out.push(format!($($t)*)) };
+}
+
+/// What `check` reports: the lines to print and the exit status (0 the scene may run, 1
+/// `run` would refuse it for its size, 2 the coupled run is likely unstable).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    /// The lines to print, in order.
+    pub lines: Vec<String>,
+    /// The exit status.
+    pub code: i32,
+}
+
+/// What `run` would refuse besides (a check that names no result, an unreadable mask), with
+/// the report's lines before it.
+#[derive(Debug)]
+pub struct Refused {
+    /// The lines assessed before the refusal.
+    pub lines: Vec<String>,
+    /// Why.
+    pub error: RunError,
+}
+
+/// Assess a validated scene for a run on `ranks` ranks sharing a node of `memory` bytes
+/// (`None`: unknown). Builds the lattice (obstacles, mask images) only when the run's memory
+/// is admitted, so no more than `run` would allocate is allocated.
+pub fn assess(
+    any: &scene::AnyScene,
+    ranks: usize,
+    memory: Option<f64>,
+) -> Result<Report, Refused> {
+    let mut lines = Vec::new();
+    match assess_into(any, ranks, memory, &mut lines) {
+        Ok(code) => Ok(Report { lines, code }),
+        Err(error) => Err(Refused { lines, error }),
+    }
+}
+
+fn assess_into(
+    any: &scene::AnyScene,
+    ranks: usize,
+    memory: Option<f64>,
+    out: &mut Vec<String>,
+) -> Result<i32, RunError> {
+    let cost = match any {
         scene::AnyScene::Fluid(s) => {
-            if !print_check(s) {
-                println!("  refused: the coupled run is likely unstable (see above)");
+            if !print_check(s, out) {
+                say!(out, "  refused: the coupled run is likely unstable (see above)");
                 return Ok(2);
             }
-            let one = s.scene.run.backend == grainflow::scene::Backend::Cpu
-                && grainflow::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
+            let one = s.scene.run.backend == scene::Backend::Cpu
+                && crate::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
             let bytes = match s.scene.run.precision {
                 Precision::F32 => 4.0,
                 Precision::F64 => 8.0,
@@ -26,18 +67,18 @@ pub fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
             Some(budget::fluid_cost(s, step_count(s, None, None), bytes, one))
         }
         scene::AnyScene::Grains(g) => {
-            println!("{}: valid grains scene", g.path.display());
-            println!("  title: {}", g.scene.title);
-            println!("  walls: {}", g.scene.grains.walls.len());
-            println!("  stability: {}", dem_verdict(g.lambda()));
+            say!(out, "{}: valid grains scene", g.path.display());
+            say!(out, "  title: {}", g.scene.title);
+            say!(out, "  walls: {}", g.scene.grains.walls.len());
+            say!(out, "  stability: {}", dem_verdict(g.lambda()));
             for w in &g.warnings {
-                println!("  warning: {w}");
+                say!(out, "  warning: {w}");
             }
             g.planned_time_step().map(|dt| {
                 let r = &g.scene.run;
                 let steps =
                     time_loop::particle_last_step((None, None), (r.steps, r.end_time_s), dt);
-                println!("  time step: {dt:.4e} s (the smallest grain's)");
+                say!(out, "  time step: {dt:.4e} s (the smallest grain's)");
                 let grains = g.estimated_grains().unwrap_or(0.0);
                 budget::Cost {
                     steps,
@@ -46,7 +87,7 @@ pub fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
             })
         }
         scene::AnyScene::Mpm(m) => {
-            print_mpm_check(m);
+            print_mpm_check(m, out);
             let r = &m.scene.run;
             let steps =
                 time_loop::particle_last_step((None, None), (r.steps, r.end_time_s), m.setup.dt);
@@ -54,43 +95,43 @@ pub fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
         }
     };
     let Some(cost) = cost else {
-        println!("  steps: decided by the grains of the sample file");
+        say!(out, "  steps: decided by the grains of the sample file");
         return Ok(0);
     };
-    println!("  steps: {}", cost.steps);
-    println!(
+    say!(out, "  steps: {}", cost.steps);
+    say!(out, 
         "  memory: about {:.1} MiB in all, {ranks} rank(s)",
         cost.memory_bytes / 1048576.0
     );
     // Judged as if all the ranks shared this node (a login node, say, cannot know).
-    if let Some(why) = budget::objection(cost, ranks, ranks, budget::machine_memory_bytes()) {
-        println!("  refused: {why}");
+    if let Some(why) = budget::objection(cost, ranks, ranks, memory) {
+        say!(out, "  refused: {why}");
         return Ok(1);
     }
     // The obstacles as `run` draws them (a mask image is read and checked here too).
-    if let scene::AnyScene::Fluid(s) = &any {
-        grainflow::run::check_quantities(s)?;
+    if let scene::AnyScene::Fluid(s) = any {
+        crate::run::check_quantities(s)?;
         scene::build_lattice(s)?;
     }
     Ok(0)
 }
 
 /// What `check` prints about an MPM scene.
-fn print_mpm_check(m: &scene::ValidMpmScene) {
+fn print_mpm_check(m: &scene::ValidMpmScene, out: &mut Vec<String>) {
     let spec = m.setup.spec;
-    println!("{}: valid MPM scene", m.path.display());
-    println!("  title: {}", m.scene.title);
-    println!(
+    say!(out, "{}: valid MPM scene", m.path.display());
+    say!(out, "  title: {}", m.scene.title);
+    say!(out, 
         "  grid: {} × {} cells of {} m; {:?} shape functions, {:?} update",
         spec.nx, spec.ny, spec.h, m.setup.shape, m.setup.scheme
     );
-    println!("  material points: {}", m.points.len());
-    println!(
+    say!(out, "  material points: {}", m.points.len());
+    say!(out, 
         "  time step: {:.4e} s (CFL limit {:.4e} s)",
         m.setup.dt, m.critical_dt
     );
     let c = m.setup.dt / m.critical_dt;
-    let verdict = match grainflow::stability::mpm::courant_limit(grainflow::stability::MPM_CSV) {
+    let verdict = match stability::mpm::courant_limit(stability::MPM_CSV) {
         Some(l) if c <= l => format!(
             "Courant number {c:.3}: inside the measured stable range (stable up to {l}, jobs/stability/mpm-courant.csv)"
         ),
@@ -99,15 +140,15 @@ fn print_mpm_check(m: &scene::ValidMpmScene) {
         ),
         None => format!("Courant number {c:.3}: no measured limit"),
     };
-    println!("  stability: {verdict}");
+    say!(out, "  stability: {verdict}");
     for w in &m.warnings {
-        println!("  warning: {w}");
+        say!(out, "  warning: {w}");
     }
 }
 
 /// The DEM time-step factor λ against the measured limit (jobs/stability/dem-lambda.csv).
 fn dem_verdict(lambda: f64) -> String {
-    match grainflow::stability::dem::lambda_limit(grainflow::stability::DEM_CSV) {
+    match stability::dem::lambda_limit(stability::DEM_CSV) {
         Some(l) if lambda <= l => format!(
             "time-step factor λ = {lambda:.3}: inside the measured stable range (energy does not grow up to λ = {l}, jobs/stability/dem-lambda.csv)"
         ),
@@ -120,10 +161,10 @@ fn dem_verdict(lambda: f64) -> String {
 
 /// What `check` prints about a fluid (or coupled) scene; false when the coupled stability
 /// map says the run is likely unstable.
-fn print_check(s: &scene::ValidScene) -> bool {
+fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
     let u = &s.units;
     let [nx, ny] = s.scene.domain.cells;
-    println!(
+    say!(out, 
         "scene {} is valid{}",
         s.path.display(),
         if s.scene.title.is_empty() {
@@ -132,38 +173,38 @@ fn print_check(s: &scene::ValidScene) -> bool {
             format!(": {}", s.scene.title)
         }
     );
-    println!(
+    say!(out, 
         "  lattice          {nx} × {ny} cells, Δx = {:.6e} m",
         u.dx_m
     );
-    println!("  time step        Δt = {:.6e} s", u.dt_s);
-    println!("  relaxation time  τ = {:.6}", u.tau);
-    println!("  lattice ν        {:.6e}", u.nu_lattice);
-    println!("  lattice velocity {:.6} (Mach {:.4})", u.u_lattice, u.mach);
+    say!(out, "  time step        Δt = {:.6e} s", u.dt_s);
+    say!(out, "  relaxation time  τ = {:.6}", u.tau);
+    say!(out, "  lattice ν        {:.6e}", u.nu_lattice);
+    say!(out, "  lattice velocity {:.6} (Mach {:.4})", u.u_lattice, u.mach);
     let family = match s.scene.fluid.collision {
         scene::CollisionModel::Bgk => "bgk",
         scene::CollisionModel::Trt { .. } => "trt",
         scene::CollisionModel::Mrt { .. } => "mrt",
     };
-    let op = grainflow::stability::lbm::Operator::ALL
+    let op = stability::lbm::Operator::ALL
         .into_iter()
         .find(|o| {
             o.family == family && o.smagorinsky == s.scene.fluid.smagorinsky_constant.is_some()
         })
         .expect("every operator is in the map");
-    let verdict = grainflow::stability::StabilityMap::builtin().verdict(&op, u.tau, u.mach);
-    println!(
+    let verdict = stability::StabilityMap::builtin().verdict(&op, u.tau, u.mach);
+    say!(out, 
         "  stability        {}",
         verdict.describe(&op, u.tau, u.mach)
     );
-    println!("  Reynolds number  {:.4}", u.reynolds);
+    say!(out, "  Reynolds number  {:.4}", u.reynolds);
     // The in-place kernel (the CPU default) holds one distribution buffer.
-    let one = s.scene.run.backend == grainflow::scene::Backend::Cpu
-        && grainflow::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
+    let one = s.scene.run.backend == scene::Backend::Cpu
+        && crate::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
     let buffers = if one { 1.0 } else { 2.0 };
     let coupled = s.scene.grains.is_some();
     let bytes = |b: f64| budget::fluid_bytes([nx, ny], buffers, b, coupled);
-    println!(
+    say!(out, 
         "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 ({} distribution buffer{}, cell types, snapshot fields)",
         bytes(8.0) / 1048576.0,
         bytes(4.0) / 1048576.0,
@@ -171,9 +212,9 @@ fn print_check(s: &scene::ValidScene) -> bool {
         if one { ", in place" } else { "s" }
     );
     let mut stable = true;
-    match grainflow::coupled::plan(s) {
+    match crate::coupled::plan(s) {
         Ok(Some(p)) => {
-            println!(
+            say!(out, 
                 "  coupling         {} with {} DEM sub-steps per fluid step (Δt_D = {:.4e} s){}",
                 p.scheme.name(),
                 p.substeps,
@@ -185,15 +226,15 @@ fn print_check(s: &scene::ValidScene) -> bool {
                 }
             );
             let (a, b) = p.cells_per_diameter;
-            println!(
+            say!(out, 
                 "  grains           {}; {a:.1}–{b:.1} cells per diameter",
                 p.grains
                     .map(|n| n.to_string())
                     .unwrap_or_else(|| "packed at run time".into())
             );
-            println!("  DEM stability    {}", dem_verdict(p.dem_lambda));
+            say!(out, "  DEM stability    {}", dem_verdict(p.dem_lambda));
             if let Some(g) = &s.scene.grains {
-                use grainflow::stability::coupled;
+                use stability::coupled;
                 let case = coupled::CoupledCase {
                     scheme: p.scheme.name().to_string(),
                     cells_per_diameter: a,
@@ -203,15 +244,15 @@ fn print_check(s: &scene::ValidScene) -> bool {
                 };
                 let map = coupled::parse(coupled::COUPLED_CSV);
                 let v = coupled::verdict(&map, &case);
-                println!("  coupled stability {}", v.describe(&case));
+                say!(out, "  coupled stability {}", v.describe(&case));
                 stable = !matches!(v, coupled::CoupledVerdict::Unstable(_));
             }
         }
         Ok(None) => {}
-        Err(e) => println!("  coupling: {e}"),
+        Err(e) => say!(out, "  coupling: {e}"),
     }
     for w in &s.warnings {
-        println!("  warning: {w}");
+        say!(out, "  warning: {w}");
     }
     stable
 }
