@@ -34,11 +34,7 @@ pub struct Refused {
 /// Assess a validated scene for a run on `ranks` ranks sharing a node of `memory` bytes
 /// (`None`: unknown). Builds the lattice (obstacles, mask images) only when the run's memory
 /// is admitted, so no more than `run` would allocate is allocated.
-pub fn assess(
-    any: &scene::AnyScene,
-    ranks: usize,
-    memory: Option<f64>,
-) -> Result<Report, Refused> {
+pub fn assess(any: &scene::AnyScene, ranks: usize, memory: Option<f64>) -> Result<Report, Refused> {
     let mut lines = Vec::new();
     match assess_into(any, ranks, memory, &mut lines) {
         Ok(code) => Ok(Report { lines, code }),
@@ -55,7 +51,10 @@ fn assess_into(
     let cost = match any {
         scene::AnyScene::Fluid(s) => {
             if !print_check(s, out) {
-                say!(out, "  refused: the coupled run is likely unstable (see above)");
+                say!(
+                    out,
+                    "  refused: the coupled run is likely unstable (see above)"
+                );
                 return Ok(2);
             }
             let one = s.scene.run.backend == scene::Backend::Cpu
@@ -99,7 +98,8 @@ fn assess_into(
         return Ok(0);
     };
     say!(out, "  steps: {}", cost.steps);
-    say!(out, 
+    say!(
+        out,
         "  memory: about {:.1} MiB in all, {ranks} rank(s)",
         cost.memory_bytes / 1048576.0
     );
@@ -121,14 +121,21 @@ fn print_mpm_check(m: &scene::ValidMpmScene, out: &mut Vec<String>) {
     let spec = m.setup.spec;
     say!(out, "{}: valid MPM scene", m.path.display());
     say!(out, "  title: {}", m.scene.title);
-    say!(out, 
+    say!(
+        out,
         "  grid: {} × {} cells of {} m; {:?} shape functions, {:?} update",
-        spec.nx, spec.ny, spec.h, m.setup.shape, m.setup.scheme
+        spec.nx,
+        spec.ny,
+        spec.h,
+        m.setup.shape,
+        m.setup.scheme
     );
     say!(out, "  material points: {}", m.points.len());
-    say!(out, 
+    say!(
+        out,
         "  time step: {:.4e} s (CFL limit {:.4e} s)",
-        m.setup.dt, m.critical_dt
+        m.setup.dt,
+        m.critical_dt
     );
     let c = m.setup.dt / m.critical_dt;
     let verdict = match stability::mpm::courant_limit(stability::MPM_CSV) {
@@ -164,7 +171,8 @@ fn dem_verdict(lambda: f64) -> String {
 fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
     let u = &s.units;
     let [nx, ny] = s.scene.domain.cells;
-    say!(out, 
+    say!(
+        out,
         "scene {} is valid{}",
         s.path.display(),
         if s.scene.title.is_empty() {
@@ -173,14 +181,20 @@ fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
             format!(": {}", s.scene.title)
         }
     );
-    say!(out, 
+    say!(
+        out,
         "  lattice          {nx} × {ny} cells, Δx = {:.6e} m",
         u.dx_m
     );
     say!(out, "  time step        Δt = {:.6e} s", u.dt_s);
     say!(out, "  relaxation time  τ = {:.6}", u.tau);
     say!(out, "  lattice ν        {:.6e}", u.nu_lattice);
-    say!(out, "  lattice velocity {:.6} (Mach {:.4})", u.u_lattice, u.mach);
+    say!(
+        out,
+        "  lattice velocity {:.6} (Mach {:.4})",
+        u.u_lattice,
+        u.mach
+    );
     let family = match s.scene.fluid.collision {
         scene::CollisionModel::Bgk => "bgk",
         scene::CollisionModel::Trt { .. } => "trt",
@@ -193,7 +207,8 @@ fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
         })
         .expect("every operator is in the map");
     let verdict = stability::StabilityMap::builtin().verdict(&op, u.tau, u.mach);
-    say!(out, 
+    say!(
+        out,
         "  stability        {}",
         verdict.describe(&op, u.tau, u.mach)
     );
@@ -204,7 +219,8 @@ fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
     let buffers = if one { 1.0 } else { 2.0 };
     let coupled = s.scene.grains.is_some();
     let bytes = |b: f64| budget::fluid_bytes([nx, ny], buffers, b, coupled);
-    say!(out, 
+    say!(
+        out,
         "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 ({} distribution buffer{}, cell types, snapshot fields)",
         bytes(8.0) / 1048576.0,
         bytes(4.0) / 1048576.0,
@@ -214,7 +230,8 @@ fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
     let mut stable = true;
     match crate::coupled::plan(s) {
         Ok(Some(p)) => {
-            say!(out, 
+            say!(
+                out,
                 "  coupling         {} with {} DEM sub-steps per fluid step (Δt_D = {:.4e} s){}",
                 p.scheme.name(),
                 p.substeps,
@@ -226,7 +243,8 @@ fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
                 }
             );
             let (a, b) = p.cells_per_diameter;
-            say!(out, 
+            say!(
+                out,
                 "  grains           {}; {a:.1}–{b:.1} cells per diameter",
                 p.grains
                     .map(|n| n.to_string())

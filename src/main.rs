@@ -16,6 +16,7 @@ use grainflow::run::{
 use grainflow::scene;
 
 fn main() {
+    STARTED.get_or_init(std::time::SystemTime::now);
     // Writing to a closed pipe (`grainflow check … | head`) ends the process quietly, as
     // for other command-line tools, instead of panicking in println!.
     #[cfg(unix)]
@@ -310,12 +311,7 @@ fn run_fluid_scene(
         "{} steps in {:.2} s: {:.1} MLUPS (kernel {:.1})",
         summary.run.steps, summary.run.wall_time_s, summary.mlups, summary.kernel_mlups
     );
-    let files = if s.scene.grains.is_some() {
-        "fields.h5 + fields.xdmf, grains.h5 + grains.xdmf, probe_*.csv"
-    } else {
-        "fields.h5 + fields.xdmf, probe_*.csv"
-    };
-    Ok(report(&summary.run, files, &opts.out_dir))
+    Ok(report(&summary.run, &opts.out_dir))
 }
 
 /// What a grain or MPM run's first log line adds when its idle workers look for work (it
@@ -393,11 +389,7 @@ fn run_grain_scene(
         summary.grain_steps_per_s / 1e6,
         summary.migrated
     );
-    Ok(report(
-        &summary.run,
-        "grains.h5 + grains.xdmf",
-        &opts.out_dir,
-    ))
+    Ok(report(&summary.run, &opts.out_dir))
 }
 
 /// A run stopped by SIGTERM before its first step: a `summary.json` that says so (rank 0)
@@ -419,9 +411,9 @@ fn stopped_before_start(
     Ok(exit_code(Status::Interrupted))
 }
 
-/// Print a run's results, checks, output folder (`files` are what it wrote besides
-/// summary.json and pictures/) and any error or restart hint; returns the exit code.
-fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
+/// Print a run's results, checks, output folder with every file the run wrote, and any
+/// error or restart hint; returns the exit code.
+fn report(run: &RunHeader, out: &std::path::Path) -> i32 {
     for (k, v) in &run.results {
         println!("  {k} = {v:.6e}");
     }
@@ -433,15 +425,8 @@ fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
     if run.shortened && !run.checks.is_empty() {
         eprintln!("note: --steps or --end-time cut the run short of the scene's length: its checks are reported, not judged");
     }
-    let pictures = if out.join("pictures").is_dir() {
-        ", pictures/"
-    } else {
-        ""
-    };
-    println!(
-        "output: {}  (summary.json, {files}{pictures})",
-        out.display()
-    );
+    println!("output: {}", out.display());
+    println!("  wrote: {}", written_files(out));
     if let Some(e) = &run.error {
         eprintln!("error: {e}");
     }
@@ -463,6 +448,43 @@ fn report(run: &RunHeader, files: &str, out: &std::path::Path) -> i32 {
     }
     exit_code(run.status)
 }
+
+/// The files this process wrote into `out` (modified since it started), by name, and the
+/// pictures and movies under `pictures/` counted.
+fn written_files(out: &std::path::Path) -> String {
+    // A second's margin: file times come from a coarser clock than `now`.
+    let since =
+        *STARTED.get_or_init(std::time::SystemTime::now) - std::time::Duration::from_secs(1);
+    let fresh = |dir: &std::path::Path| -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .into_iter()
+            .flatten()
+            .filter_map(Result::ok)
+            .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+            .filter(|e| {
+                e.metadata()
+                    .and_then(|m| m.modified())
+                    .is_ok_and(|t| t >= since)
+            })
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| !n.starts_with('.'))
+            .collect();
+        names.sort();
+        names
+    };
+    let mut list = fresh(out);
+    let pictures = fresh(&out.join("pictures"));
+    let png = pictures.iter().filter(|n| n.ends_with(".png")).count();
+    let movies: Vec<&String> = pictures.iter().filter(|n| n.ends_with(".mp4")).collect();
+    if png > 0 {
+        list.push(format!("pictures/ ({png} PNG)"));
+    }
+    list.extend(movies.iter().map(|m| format!("pictures/{m}")));
+    list.join(", ")
+}
+
+/// When this process started: files modified since were written by this run.
+static STARTED: std::sync::OnceLock<std::time::SystemTime> = std::sync::OnceLock::new();
 
 /// One line per check: PASS/FAIL (or SKIP, not judged, with what it would give), the
 /// quantity, its value and the bounds.
@@ -551,5 +573,5 @@ fn run_mpm_scene(
         summary.point_steps_per_s / 1e6,
         summary.migrated
     );
-    Ok(report(&summary.run, "mpm.h5 + mpm.xdmf", &opts.out_dir))
+    Ok(report(&summary.run, &opts.out_dir))
 }

@@ -451,6 +451,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let plan =
         LoopPlan::new(n, output, &opts.out_dir, next).scene_length(step_count(scene, None, None));
     let end = drive(&mut stepper, &plan, &mut progress, comm)?;
+    stepper.out.finish(comm);
     summarise(
         scene,
         stepper,

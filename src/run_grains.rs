@@ -14,7 +14,8 @@ use dem::walls::apply_walls;
 use dem::{Grains, SlabDem};
 use io::atomic::{ensure_writable_dir, write_atomic};
 use io::grains_checkpoint::{self, GrainRunState};
-use io::grains_out::{write_grains_png, GrainWriter};
+use io::grains_out::GrainWriter;
+use io::grains_picture::write_grains_png;
 use scene::{GrainAnalysis, GrainScene, ValidGrainScene};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -74,10 +75,8 @@ pub struct GrainStepper<'a> {
     /// The grains on this rank.
     pub d: SlabDem,
     writer: GrainWriter,
-    /// Speed at the top of the pictures' colour scale (m/s); 0 scales a frame to itself.
-    picture_speed: f64,
-    /// The scale of every frame after the first.
-    frame_speed: f64,
+    /// The pictures' size and the top of their speed scale (m/s), fixed for the run.
+    picture: io::figure::PictureStyle,
     /// Wall and floor of a column-collapse analysis.
     collapse_at: Option<(f64, f64)>,
     /// (t, deposit length) every 1000 steps of a collapse that did not restart.
@@ -132,11 +131,11 @@ impl Stepper for GrainStepper<'_> {
                 &self.out_dir.join("pictures").join(name),
                 &self.d.system,
                 ([0.0, 0.0], self.scene.scene.domain.size()),
-                self.picture_speed,
+                self.picture,
+                self.d.system.time,
                 comm,
             )?;
         }
-        self.picture_speed = self.frame_speed;
         Ok(())
     }
 
@@ -207,7 +206,13 @@ pub fn run_grains(
     let (d, settle_steps, initial, resume) = set_up(scene, opts, comm)?;
     let grains = d.global_count(comm);
     let writer = GrainWriter::open(&opts.out_dir, comm, resume.as_ref().map(|r| r.step), false)?;
-    // Speed scale of the pictures: free fall over the sample height, so frames compare.
+    if comm.is_root() {
+        let pics = opts.out_dir.join("pictures");
+        io::figure::remove_stale(&pics, resume.as_ref().map(|r| r.step))
+            .map_err(|source| io::OutputError::Io { path: pics, source })?;
+    }
+    // Speed scale of the pictures unless the scene sets it: free fall over the sample
+    // height, the same for every frame.
     let height = initial.y.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
         - initial.y.iter().cloned().fold(f64::INFINITY, f64::min);
     let g_abs = s.grains.gravity_m_s2[0].hypot(s.grains.gravity_m_s2[1]);
@@ -258,8 +263,10 @@ pub fn run_grains(
         start_step: d.system.steps,
         d,
         writer,
-        picture_speed: if resume.is_some() { frame_speed } else { 0.0 },
-        frame_speed,
+        picture: io::figure::PictureStyle {
+            size_px: s.output.picture_size_px(),
+            limit: s.output.picture_limits().speed_m_s.unwrap_or(frame_speed),
+        },
         collapse_at,
         fronts: Vec::new(),
         settle_steps,
@@ -274,6 +281,9 @@ pub fn run_grains(
         clock: StageClock::new(&GRAIN_STAGES),
     };
     let end = drive(&mut stepper, &plan, &mut progress, comm)?;
+    if comm.is_root() && s.output.pictures() {
+        io::figure::write_movies(&opts.out_dir.join("pictures"), &["grains_step_"]);
+    }
     summarise(scene, stepper, end, g_abs, comm, &opts.out_dir)
 }
 

@@ -210,7 +210,12 @@ impl Stepper for MpmStepper<'_> {
         if out.pictures() {
             let name = format!("mpm_step_{:08}.png", self.sys.steps);
             let path = self.out_dir.join("pictures").join(name);
-            write_mpm_png(&path, &self.sys, out.picture_field(), self.vmax, comm)?;
+            let style = io::figure::PictureStyle {
+                size_px: out.picture_size_px(),
+                limit: self.vmax,
+            };
+            let field = out.picture_field();
+            write_mpm_png(&path, &self.sys, field, style, self.sys.time, comm)?;
         }
         Ok(())
     }
@@ -259,6 +264,12 @@ pub fn run_mpm(
         Some(p) => Some(mpm_checkpoint::read(p, comm)?),
         None => None,
     };
+    if comm.is_root() {
+        let pics = opts.out_dir.join("pictures");
+        let after = restored.as_ref().map(|r| r.run.step);
+        io::figure::remove_stale(&pics, after)
+            .map_err(|source| io::OutputError::Io { path: pics, source })?;
+    }
     let spec = scene.setup.spec;
     let (points, resume) = match restored {
         Some(r) => (r.points, Some(r.run)),
@@ -293,9 +304,12 @@ pub fn run_mpm(
     let writer = MpmWriter::open(&opts.out_dir, &sys, comm, resume.map(|r| r.step))?;
     // Colour scale: free-fall speed over the domain height, or plastic strain 0–1.
     let g_abs = s.mpm.gravity_m_s2[0].hypot(s.mpm.gravity_m_s2[1]);
+    let limits = s.output.picture_limits();
     let vmax = match s.output.picture_field() {
-        PictureField::Speed => (2.0 * g_abs * spec.height()).sqrt().max(1e-9),
-        PictureField::PlasticStrain => 1.0,
+        PictureField::PlasticStrain => limits.plastic_strain.unwrap_or(1.0),
+        _ => limits
+            .speed_m_s
+            .unwrap_or((2.0 * g_abs * spec.height()).sqrt().max(1e-9)),
     };
     let dt = sys.setup.dt;
     let mut progress = Progress::new(
@@ -327,6 +341,9 @@ pub fn run_mpm(
         clock: StageClock::new(&OBSERVE),
     };
     let end = drive(&mut stepper, &plan, &mut progress, comm)?;
+    if comm.is_root() && s.output.pictures() {
+        io::figure::write_movies(&opts.out_dir.join("pictures"), &["mpm_step_"]);
+    }
     summarise(scene, stepper, end, start_totals, comm, &opts.out_dir)
 }
 

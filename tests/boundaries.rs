@@ -44,8 +44,9 @@ fn max_deviation(text: &str, u: [f64; 2]) -> f64 {
         .unwrap()
         .read_raw()
         .unwrap();
-    v.chunks(2)
-        .map(|c| (c[0] - u[0]).abs().max((c[1] - u[1]).abs()))
+    // Three components per cell (u_x, u_y, 0).
+    v.chunks(3)
+        .map(|c| (c[0] - u[0]).abs().max((c[1] - u[1]).abs()).max(c[2].abs()))
         .fold(0.0, f64::max)
 }
 

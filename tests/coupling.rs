@@ -435,22 +435,26 @@ fn coupled_output_has_fluid_and_grains() {
     }
     let xdmf = std::fs::read_to_string(d.join("grains.xdmf")).unwrap();
     assert!(xdmf.contains("grains.h5:/step_00000200/position"));
-    // The speed picture shows the grains as solid grey disks.
+    // The speed picture draws the grains over the field as light grey disks outlined in
+    // black, at 1024 / 64 = 16 pixels per cell.
     let png = std::fs::read(d.join("pictures/speed_00000200.png")).unwrap();
     let decoder = png::Decoder::new(std::io::Cursor::new(png));
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.width, 1024, "the panel is 1024 pixels wide");
     let grey = buf[..info.buffer_size()]
         .chunks(3)
-        .filter(|p| p == &[110, 110, 110])
+        .filter(|p| p == &[225, 225, 225])
         .count();
-    // Two disks of radius 5 and 4 cells, drawn 8× enlarged: about π(25 + 16)·64 pixels.
-    let expected = std::f64::consts::PI * 41.0 * 64.0;
+    // Disks of radius 5 and 4 cells (80 and 64 pixels), filled inside their one-pixel rim.
+    let expected = std::f64::consts::PI * (79.0f64.powi(2) + 63.0f64.powi(2));
     assert!(
-        (grey as f64 - expected).abs() < 0.15 * expected,
+        (grey as f64 - expected).abs() < 0.05 * expected,
         "{grey} grey pixels, expected about {expected:.0}"
     );
+    // The grains' own picture is beside it, and the series carries no stale frames.
+    assert!(d.join("pictures/grains_00000200.png").is_file());
 }
 
 /// The coupled step gives the same bits on 1 and 2 threads (forces are summed in a fixed

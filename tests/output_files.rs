@@ -43,7 +43,7 @@ fn snapshots_probes_and_summary() {
         "median {median} p99 {p99} corner {corner}"
     );
     let vel = f.dataset("step_00001000/velocity").unwrap();
-    assert_eq!(vel.shape(), [100, 250, 2]);
+    assert_eq!(vel.shape(), [100, 250, 3]);
     let units: hdf5::types::VarLenUnicode = vel.attr("units").unwrap().read_scalar().unwrap();
     assert_eq!(units.as_str(), "m/s");
     let t: f64 = vel.attr("time_s").unwrap().read_scalar().unwrap();

@@ -7,8 +7,9 @@ mod common;
 use std::collections::BTreeSet;
 
 /// The files that define the scene language's tables.
-const SCHEMA: [&str; 9] = [
+const SCHEMA: [&str; 10] = [
     "crates/scene/src/schema.rs",
+    "crates/scene/src/pictures.rs",
     "crates/scene/src/grains.rs",
     "crates/scene/src/mpm.rs",
     "crates/scene/src/output.rs",

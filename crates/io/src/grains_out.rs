@@ -1,6 +1,6 @@
 //! Grain snapshots: `grains.h5` (one group per snapshot, every rank writing its block of
 //! each dataset collectively), an XDMF sidecar that ParaView opens as points, and PNG
-//! pictures of the grains coloured by speed.
+//! pictures of the grains coloured by speed (`grains_picture`).
 //!
 //! Rows are in rank order, then local order, so they differ between rank counts; the `id`
 //! dataset identifies each grain (sort by it to compare runs).
@@ -107,12 +107,12 @@ impl GrainWriter {
             return Ok(());
         }
         let grp = self.file.create_group(&group).map_err(h5)?;
-        for (name, value) in [("time_s", sys.time), ("step", step as f64)] {
-            grp.new_attr::<f64>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&value))
-                .map_err(h5)?;
-        }
+        grp.new_attr::<f64>()
+            .create("time_s")
+            .and_then(|a| a.write_scalar(&sys.time))
+            .and_then(|_| grp.new_attr::<u64>().create("step"))
+            .and_then(|a| a.write_scalar(&step))
+            .map_err(h5)?;
         let external = sys.external();
         for (name, comps, units) in self.datasets().iter().copied() {
             let mut v = Vec::with_capacity(n * comps);
@@ -243,65 +243,4 @@ impl GrainWriter {
         s.push_str("  </Grid>\n </Domain>\n</Xdmf>\n");
         write_atomic(&self.path.with_extension("xdmf"), s.as_bytes())
     }
-}
-
-/// Draw the grains of every rank into `path` (rank 0 writes; collective): disks on a white
-/// background framing `region` (m), coloured by speed from 0 to `max_speed` (m/s; ≤ 0:
-/// the largest speed in the picture), walls as black segments.
-pub fn write_grains_png(
-    path: &Path,
-    sys: &DemSystem,
-    region: ([f64; 2], [f64; 2]),
-    max_speed: f64,
-    comm: &dyn Comm,
-) -> Result<(), OutputError> {
-    let g = &sys.grains;
-    let mut local = Vec::with_capacity(sys.owned() * 4);
-    for i in 0..sys.owned() {
-        local.extend_from_slice(&[g.x[i], g.y[i], g.r[i], g.vx[i].hypot(g.vy[i])]);
-    }
-    let all = comm.all_gather_f64(&local);
-    if !comm.is_root() {
-        return Ok(());
-    }
-    let (lo, hi) = region;
-    let (w_m, h_m) = (hi[0] - lo[0], hi[1] - lo[1]);
-    let width = 1024usize;
-    let height = ((width as f64 * h_m / w_m).round() as usize).clamp(16, 4096);
-    let scale = width as f64 / w_m;
-    let vmax = if max_speed > 0.0 {
-        max_speed
-    } else {
-        all.chunks_exact(4).map(|c| c[3]).fold(1e-12, f64::max)
-    };
-    let mut rgb = vec![255u8; width * height * 3];
-    let mut put = |px: isize, py: isize, c: [u8; 3]| {
-        if px >= 0 && py >= 0 && (px as usize) < width && (py as usize) < height {
-            let k = (py as usize * width + px as usize) * 3;
-            rgb[k..k + 3].copy_from_slice(&c);
-        }
-    };
-    for c in all.chunks_exact(4) {
-        let (cx, cy, r) = ((c[0] - lo[0]) * scale, (hi[1] - c[1]) * scale, c[2] * scale);
-        let colour = super::colormap::sequential(c[3] / vmax);
-        let rr = r.max(0.5);
-        for py in (cy - rr).floor() as isize..=(cy + rr).ceil() as isize {
-            for px in (cx - rr).floor() as isize..=(cx + rr).ceil() as isize {
-                let (dx, dy) = (px as f64 + 0.5 - cx, py as f64 + 0.5 - cy);
-                if dx * dx + dy * dy <= rr * rr {
-                    put(px, py, colour);
-                }
-            }
-        }
-    }
-    for w in sys.walls.iter().filter(|w| !w.removed) {
-        let steps = ((w.b[0] - w.a[0]).hypot(w.b[1] - w.a[1]) * scale).ceil() as usize + 1;
-        for k in 0..=steps {
-            let t = k as f64 / steps as f64;
-            let x = (w.a[0] + t * (w.b[0] - w.a[0]) - lo[0]) * scale;
-            let y = (hi[1] - (w.a[1] + t * (w.b[1] - w.a[1]))) * scale;
-            put(x as isize, y as isize, [0, 0, 0]);
-        }
-    }
-    super::picture::write_rgb_png(path, width, height, &rgb)
 }

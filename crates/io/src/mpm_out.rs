@@ -7,7 +7,9 @@
 //! the `id` dataset identifies each point (sort by it to compare runs).
 
 use super::atomic::write_atomic;
+use super::figure::{write_figure, Frame, Image, Legend, PictureStyle};
 use super::h5par::{self, write_rows, Access, Block};
+use super::picture::Scale;
 use super::OutputError;
 use decomposition::Comm;
 use mpm::MpmSystem;
@@ -21,7 +23,11 @@ use std::path::{Path, PathBuf};
 const POINT_DATASETS: [(&str, usize, &str); 6] = [
     ("position", 3, "m"),
     ("velocity", 3, "m/s"),
-    ("stress", 4, "Pa (xx, yy, xy, zz; tension positive)"),
+    (
+        "stress",
+        9,
+        "Pa (3 x 3 row-major: xx xy xz yx yy yz zx zy zz; tension positive; plane strain)",
+    ),
     ("plastic_strain", 1, "1 (equivalent plastic strain)"),
     ("speed", 1, "m/s"),
     ("volume", 1, "m^2 (per metre of depth)"),
@@ -84,19 +90,22 @@ impl MpmWriter {
         let p = &sys.points;
         let n = p.len();
         let grp = self.file.create_group(&group).map_err(h5)?;
-        for (name, value) in [("time_s", sys.time), ("step", sys.steps as f64)] {
-            grp.new_attr::<f64>()
-                .create(name)
-                .and_then(|a| a.write_scalar(&value))
-                .map_err(h5)?;
-        }
+        grp.new_attr::<f64>()
+            .create("time_s")
+            .and_then(|a| a.write_scalar(&sys.time))
+            .and_then(|_| grp.new_attr::<u64>().create("step"))
+            .and_then(|a| a.write_scalar(&sys.steps))
+            .map_err(h5)?;
         for (name, comps, units) in POINT_DATASETS {
             let mut v = Vec::with_capacity(n * comps);
             for i in 0..n {
                 match name {
                     "position" => v.extend_from_slice(&[p.pos[i][0], p.pos[i][1], 0.0]),
                     "velocity" => v.extend_from_slice(&[p.vel[i][0], p.vel[i][1], 0.0]),
-                    "stress" => v.extend_from_slice(&p.stress[i]),
+                    "stress" => {
+                        let [xx, yy, xy, zz] = p.stress[i];
+                        v.extend_from_slice(&[xx, xy, 0.0, xy, yy, 0.0, 0.0, 0.0, zz]);
+                    }
                     "plastic_strain" => v.push(p.eps_p[i]),
                     "speed" => v.push(p.vel[i][0].hypot(p.vel[i][1])),
                     _ => v.push(p.volume(i)),
@@ -218,21 +227,24 @@ fn unit(ds: &hdf5::Dataset, units: &str) -> hdf5::Result<()> {
 }
 
 /// Draw the points of every rank into `path` (rank 0 writes; collective): each point as
-/// a filled square of its domain, on a white background framing the grid, coloured by
-/// `field` from 0 to `max` (≤ 0: the largest value in the picture).
+/// a filled square of its domain, on white framing the grid, coloured by `field` from 0 to
+/// `style.limit`, the sides that are not open drawn black, with a legend giving the time
+/// `time_s`.
 pub fn write_mpm_png(
     path: &Path,
     sys: &MpmSystem,
     field: PictureField,
-    max: f64,
+    style: PictureStyle,
+    time_s: f64,
     comm: &dyn Comm,
 ) -> Result<(), OutputError> {
     let p = &sys.points;
     let mut local = Vec::with_capacity(p.len() * 4);
     for i in 0..p.len() {
         let value = match field {
-            PictureField::Speed => p.vel[i][0].hypot(p.vel[i][1]),
             PictureField::PlasticStrain => p.eps_p[i],
+            // Validation leaves speed or plastic strain to MPM scenes.
+            _ => p.vel[i][0].hypot(p.vel[i][1]),
         };
         local.extend_from_slice(&[p.pos[i][0], p.pos[i][1], p.half0[i], value]);
     }
@@ -241,28 +253,33 @@ pub fn write_mpm_png(
         return Ok(());
     }
     let spec = sys.setup.spec;
-    let (w_m, h_m) = (spec.width(), spec.height());
-    let width = 1400usize;
-    let height = ((width as f64 * h_m / w_m).round() as usize).clamp(16, 4096);
-    let scale = width as f64 / w_m;
-    let vmax = if max > 0.0 {
-        max
-    } else {
-        all.chunks_exact(4).map(|c| c[3]).fold(1e-12, f64::max)
-    };
-    let mut rgb = vec![255u8; width * height * 3];
+    let frame = Frame::new(([0.0, 0.0], [spec.width(), spec.height()]), style.size_px);
+    let (width, height) = frame.size();
+    let mut panel = Image::new(width, height, [255, 255, 255]);
+    let vmax = style.limit.max(1e-300);
     for c in all.chunks_exact(4) {
         let colour = super::colormap::sequential(c[3] / vmax);
-        let half = (c[2] * scale).max(0.5);
-        let (cx, cy) = (c[0] * scale, (h_m - c[1]) * scale);
+        let half = (c[2] * frame.scale).max(0.5);
+        let [cx, cy] = frame.pixel([c[0], c[1]]);
         let (x0, x1) = ((cx - half).floor() as isize, (cx + half).ceil() as isize);
         let (y0, y1) = ((cy - half).floor() as isize, (cy + half).ceil() as isize);
-        for py in y0.max(0)..y1.min(height as isize) {
-            for px in x0.max(0)..x1.min(width as isize) {
-                let k = (py as usize * width + px as usize) * 3;
-                rgb[k..k + 3].copy_from_slice(&colour);
-            }
-        }
+        panel.fill((x0, y0), (x1, y1), colour);
     }
-    super::picture::write_rgb_png(path, width, height, &rgb)
+    let b = &sys.setup.boundaries;
+    let wall = |s: mpm::grid::Side| s != mpm::grid::Side::Open;
+    super::picture::draw_walls(
+        &mut panel,
+        [wall(b.left), wall(b.right), wall(b.bottom), wall(b.top)],
+    );
+    let title = match field {
+        PictureField::PlasticStrain => "equivalent plastic strain",
+        _ => "speed (m/s)",
+    };
+    let legend = Legend {
+        title: title.into(),
+        scale: Scale::Magnitude(style.limit),
+        time_s,
+        metres_per_pixel: 1.0 / frame.scale,
+    };
+    write_figure(path, &panel, &legend)
 }

@@ -1,6 +1,8 @@
-//! PNG pictures of scalar fields (north at the top, solids grey, small lattices scaled up).
+//! PNG pictures of scalar fields (north at the top, solids grey, walls black), scaled to a
+//! chosen size; `figure` adds the legend.
 
 use super::atomic::write_atomic;
+use super::figure::{Image, INK};
 use super::OutputError;
 use std::path::Path;
 
@@ -13,23 +15,31 @@ pub enum Scale {
     Signed(f64),
 }
 
-/// Render `values` (row-major from the south row, `nx` × `ny`) to a PNG at `path`.
-/// `solid[k]` cells are drawn grey.
-pub fn write_field_png(
-    path: &Path,
-    nx: usize,
-    ny: usize,
+/// The faces of a rectangular domain drawn as walls (a black line along the picture's
+/// edge): west, east, south, north.
+pub type WallFaces = [bool; 4];
+
+/// The field panel of a picture: `values` (row-major from the south row, `nx` × `ny`)
+/// coloured by `scale` (values beyond its limits take the end colours), `solid[k]` cells
+/// grey, the `walls` faces drawn black, the longer side `size_px` pixels (each pixel takes
+/// the cell under its centre).
+pub fn field_panel(
+    (nx, ny): (usize, usize),
     values: &[f64],
     solid: &[bool],
     scale: Scale,
-) -> Result<(), OutputError> {
-    let zoom = (512 / nx.max(ny)).clamp(1, 8);
-    let (w, h) = (nx * zoom, ny * zoom);
-    let mut rgb = vec![0u8; w * h * 3];
+    walls: WallFaces,
+    size_px: usize,
+) -> Image {
+    let long = nx.max(ny).max(1) as f64;
+    let w = ((size_px as f64 * nx as f64 / long).round() as usize).max(1);
+    let h = ((size_px as f64 * ny as f64 / long).round() as usize).max(1);
+    let mut img = Image::new(w, h, [255, 255, 255]);
     for py in 0..h {
-        let y = ny - 1 - py / zoom;
+        let y = ny - 1 - ((py as f64 + 0.5) * ny as f64 / h as f64) as usize;
         for px in 0..w {
-            let k = y * nx + px / zoom;
+            let x = ((px as f64 + 0.5) * nx as f64 / w as f64) as usize;
+            let k = y * nx + x.min(nx - 1);
             let c = if solid[k] {
                 [110, 110, 110]
             } else {
@@ -38,11 +48,30 @@ pub fn write_field_png(
                     Scale::Signed(m) => super::colormap::diverging(values[k] / m.max(1e-300)),
                 }
             };
-            rgb[(py * w + px) * 3..][..3].copy_from_slice(&c);
+            img.rgb[(py * w + px) * 3..][..3].copy_from_slice(&c);
         }
     }
-    write_rgb_png(path, w, h, &rgb)
+    draw_walls(&mut img, walls);
+    img
 }
+
+/// Black lines, two pixels wide, along the edges of `img` that are walls.
+pub fn draw_walls(img: &mut Image, [west, east, south, north]: WallFaces) {
+    let (r, b) = (img.w as f64 - 1.0, img.h as f64 - 1.0);
+    for (on, a, e) in [
+        (west, [0.0, 0.0], [0.0, b]),
+        (east, [r, 0.0], [r, b]),
+        (south, [0.0, b], [r, b]),
+        (north, [0.0, 0.0], [r, 0.0]),
+    ] {
+        if on {
+            img.segment(a, e, 2, INK);
+        }
+    }
+}
+
+/// The default size of a picture's panel: its longer side (pixels).
+pub const DEFAULT_SIZE_PX: usize = 1024;
 
 /// Encode `rgb` (8-bit RGB, `w` × `h`, rows from the top) as a PNG written atomically.
 pub fn write_rgb_png(path: &Path, w: usize, h: usize, rgb: &[u8]) -> Result<(), OutputError> {
@@ -59,22 +88,4 @@ pub fn write_rgb_png(path: &Path, w: usize, h: usize, rgb: &[u8]) -> Result<(), 
         wr.write_image_data(rgb).map_err(err)?;
     }
     write_atomic(path, &bytes)
-}
-
-/// Robust colour limit: the 99th percentile of |v| over fluid cells (so a few extreme cells
-/// near sharp corners do not wash the picture out).
-pub fn robust_limit(values: &[f64], solid: &[bool]) -> f64 {
-    let mut a: Vec<f64> = values
-        .iter()
-        .zip(solid)
-        .filter(|(_, s)| !**s)
-        .map(|(v, _)| v.abs())
-        .filter(|v| v.is_finite())
-        .collect();
-    if a.is_empty() {
-        return 1.0;
-    }
-    let k = ((a.len() - 1) as f64 * 0.99) as usize;
-    let (_, v, _) = a.select_nth_unstable_by(k, |x, y| x.total_cmp(y));
-    *v
 }

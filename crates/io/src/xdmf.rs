@@ -5,7 +5,7 @@ use std::fmt::Write;
 /// A uniform Polyvertex grid of `n` points of group `group` in HDF5 file `file`, named
 /// `name`, without its closing tag: geometry from `position` (n × 3), then one node
 /// attribute per entry of `datasets` after the first (name, components: 1 scalar, 3 vector,
-/// else matrix), then `id`. `pad` indents every line. The caller closes the `<Grid>`.
+/// 9 tensor, else matrix), then `id`. `pad` indents every line. The caller closes the `<Grid>`.
 pub fn open_points_grid(
     s: &mut String,
     pad: &str,
@@ -26,6 +26,7 @@ pub fn open_points_grid(
         let (shape, dims) = match comps {
             1 => ("Scalar", format!("{n}")),
             3 => ("Vector", format!("{n} 3")),
+            9 => ("Tensor", format!("{n} 9")),
             c => ("Matrix", format!("{n} {c}")),
         };
         let _ = write!(

@@ -17,6 +17,7 @@ mod mpm;
 mod mpm_check;
 mod mpm_material_check;
 mod output;
+mod pictures;
 mod probes_check;
 mod schema;
 mod unknown;
@@ -30,6 +31,7 @@ pub use lbm::units::{derive, TimeStepChoice, Units};
 pub use mpm::*;
 pub use mpm_check::{body_shape, mpm_result_names, parse_mpm, ValidMpmScene};
 pub use output::{Cadence, GrainDomain, Output, SceneKind};
+pub use pictures::{PictureField, PictureLimits};
 pub use schema::*;
 
 use std::path::{Path, PathBuf};

@@ -257,17 +257,6 @@ pub enum InitialStress {
     },
 }
 
-/// What the PNG pictures colour the points by.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum PictureField {
-    /// Speed |v|.
-    #[default]
-    Speed,
-    /// Equivalent plastic strain.
-    PlasticStrain,
-}
-
 /// Run length of an MPM scene.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

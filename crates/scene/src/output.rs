@@ -42,8 +42,8 @@ pub struct Output {
     /// Write PNG pictures with each snapshot (default true).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pictures: Option<bool>,
-    /// Fluid scenes: fields in snapshots, any of "density", "velocity", "vorticity" (default
-    /// all three).
+    /// Fluid scenes: fields in snapshots, any of "density", "velocity", "vorticity",
+    /// "pressure" (default all four).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fields: Option<Vec<FieldName>>,
     /// Fluid scenes: deflate level of snapshot datasets, 0 (off, the default: lattice
@@ -53,10 +53,19 @@ pub struct Output {
     /// Fluid scenes: record probes every this many steps (default 1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub probe_every_steps: Option<u64>,
-    /// MPM scenes: what the pictures colour the points by, "speed" (default) or
-    /// "plastic-strain".
+    /// What the pictures show: fluid scenes "speed", "vorticity" or "pressure" (default:
+    /// speed and vorticity); MPM scenes "speed" (default) or "plastic-strain"; grains
+    /// scenes "speed".
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub picture_field: Option<super::mpm::PictureField>,
+    pub picture_field: Option<super::pictures::PictureField>,
+    /// The longer side of a picture's panel (pixels, 64–8192; default 1024).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub picture_size_px: Option<u32>,
+    /// The top of each picture's colour scale, fixed for the whole run (signed fields run
+    /// from minus to plus the limit); a field not given takes a limit from the scene's
+    /// scales (docs/outputs.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub picture_limits: Option<super::pictures::PictureLimits>,
     /// Write `checkpoint.h5` every this many steps; absent or 0: never (a checkpoint is
     /// still written on SIGTERM and SIGUSR1, and at the end with `checkpoint_at_end`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -101,6 +110,7 @@ impl Output {
                 FieldName::Density,
                 FieldName::Velocity,
                 FieldName::Vorticity,
+                FieldName::Pressure,
             ]
         })
     }
@@ -113,8 +123,16 @@ impl Output {
         self.probe_every_steps.unwrap_or(1)
     }
     /// What MPM pictures colour.
-    pub fn picture_field(&self) -> super::mpm::PictureField {
+    pub fn picture_field(&self) -> super::pictures::PictureField {
         self.picture_field.unwrap_or_default()
+    }
+    /// The longer side of a picture's panel (pixels).
+    pub fn picture_size_px(&self) -> usize {
+        self.picture_size_px.map_or(1024, |p| p as usize)
+    }
+    /// The scene's colour limits (none set: all `None`).
+    pub fn picture_limits(&self) -> super::pictures::PictureLimits {
+        self.picture_limits.clone().unwrap_or_default()
     }
     /// Checkpoint cadence in steps (0: never).
     pub fn checkpoint_every_steps(&self) -> u64 {
@@ -181,7 +199,7 @@ pub(crate) fn validate_output(
         o.probe_every_steps.is_some(),
         SceneKind::Fluid,
     )?;
-    only("picture_field", o.picture_field.is_some(), SceneKind::Mpm)?;
+    super::pictures::validate(o, kind, ctx)?;
     if o.probe_every_steps == Some(0) {
         return Err(ctx.err(
             "probe_every_steps",

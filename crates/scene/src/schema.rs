@@ -331,10 +331,12 @@ pub enum Kernel {
 pub enum FieldName {
     /// Density (kg/m³).
     Density,
-    /// Velocity (m/s), two components.
+    /// Velocity (m/s), three components (u_x, u_y, 0), as ParaView reads vectors.
     Velocity,
     /// Vorticity (1/s).
     Vorticity,
+    /// Pressure relative to the reference density's (Pa): p = c_s² (ρ − ρ₀).
+    Pressure,
 }
 
 impl FieldName {
@@ -344,6 +346,7 @@ impl FieldName {
             FieldName::Density => "density",
             FieldName::Velocity => "velocity",
             FieldName::Vorticity => "vorticity",
+            FieldName::Pressure => "pressure",
         }
     }
 }
