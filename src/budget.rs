@@ -5,6 +5,8 @@
 use crate::error::RunError;
 use decomposition::Comm;
 
+pub mod walltime;
+
 /// Most steps a run may take without `--force`: 10⁹ steps are weeks of cluster time even
 /// on a small grid; more is almost always a unit slip (an end time in ms given as s, a
 /// stiffness in Pa given as GPa).

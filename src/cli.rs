@@ -71,7 +71,7 @@ pub enum Command {
     /// number and operator (a shear layer and a cavity), the DEM's time-step factor λ and the
     /// MPM's Courant number. Writes jobs/stability/*.csv (rebuild to ship them).
     StabilityMap {
-        /// Output folder (default: jobs/stability).
+        /// Output folder (default: ./stability-map; the shipped maps are jobs/stability).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Worker threads (default: all cores).
@@ -85,6 +85,9 @@ pub enum Command {
         /// Ranks the run will use, judged as if they all shared this node (its memory).
         #[arg(long, default_value_t = 1)]
         ranks: usize,
+        /// Threads the run will use, for the wall-time estimate (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Print version, threads, ranks and the GPU adapters wgpu finds.
     Info {

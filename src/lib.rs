@@ -30,4 +30,5 @@ pub mod run;
 pub mod run_grains;
 pub mod run_mpm;
 pub mod simulation;
+pub mod summary_units;
 pub mod time_loop;

@@ -65,7 +65,11 @@ fn real_main() -> Result<i32> {
     match cli.command {
         Command::Info { threads } => info(threads),
         Command::Template { kind, out } => template(kind, out),
-        Command::Check { scene, ranks } => check(&scene, ranks),
+        Command::Check {
+            scene,
+            ranks,
+            threads,
+        } => check(&scene, ranks, threads),
         Command::StabilityMap { out, threads } => stability_map(out, threads),
         Command::Run(args) => run(args),
     }
@@ -73,9 +77,16 @@ fn real_main() -> Result<i32> {
 
 /// `grainflow check SCENE`: validate any kind of scene and print what a run will use; a
 /// run that `run` would refuse for its size (on `ranks` ranks) fails the check.
-fn check(scene: &std::path::Path, ranks: usize) -> Result<i32> {
+fn check(scene: &std::path::Path, ranks: usize, threads: Option<usize>) -> Result<i32> {
+    if let Some(t) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("setting up the thread pool")?;
+    }
     let any = grainflow::scene::load_any(scene)?;
-    let report = grainflow::check::assess(&any, ranks, grainflow::budget::machine_memory_bytes());
+    let memory = grainflow::budget::machine_memory_bytes();
+    let report = grainflow::check::assess(&any, ranks, memory, true);
     // What was assessed before a refusal is printed first, as it always was.
     let (lines, outcome) = match report {
         Ok(r) => (r.lines, Ok(r.code)),
@@ -163,12 +174,17 @@ fn stability_map(out: Option<std::path::PathBuf>, threads: Option<usize>) -> Res
             .build_global()
             .context("setting up the thread pool")?;
     }
-    let dir = out.unwrap_or_else(|| std::path::PathBuf::from("jobs/stability"));
+    // Into a folder of the user's, never the shipped maps unless asked (--out jobs/stability).
+    let dir = out.unwrap_or_else(|| std::path::PathBuf::from("stability-map"));
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let mpm = match scene::load_any(std::path::Path::new("tests/scenes/mpm_collapse.toml"))? {
+    // The MPM map's scene is built in, so the command runs from any folder.
+    const MPM_SCENE: &str = include_str!("../tests/scenes/mpm_collapse.toml");
+    let mpm_path = std::path::Path::new("tests/scenes/mpm_collapse.toml");
+    let mpm = match scene::parse_any(MPM_SCENE, mpm_path)? {
         scene::AnyScene::Mpm(m) => m,
         _ => anyhow::bail!("tests/scenes/mpm_collapse.toml is not an MPM scene"),
     };
+    println!("{}", stability_map_estimate());
     let t = std::time::Instant::now();
     let summary = grainflow::stability::write_maps(&dir, &mpm)
         .with_context(|| format!("writing the maps into {}", dir.display()))?;
@@ -179,6 +195,36 @@ fn stability_map(out: Option<std::path::PathBuf>, threads: Option<usize>) -> Res
         t.elapsed().as_secs_f64()
     );
     Ok(0)
+}
+
+/// What the stability maps will cost on this machine: the fluid map's cell updates at the
+/// measured single-thread speed of its 64² boxes (an upper bound: unstable runs stop early),
+/// spread over the pool's threads.
+fn stability_map_estimate() -> String {
+    use grainflow::budget::walltime::{human, measure_fluid};
+    use grainflow::stability as st;
+    let runs =
+        st::lbm::Flow::ALL.len() * st::lbm::Operator::ALL.len() * st::TAUS.len() * st::MACHS.len();
+    let cells = runs as f64 * (st::LBM_SIZE * st::LBM_SIZE * st::LBM_STEPS) as f64;
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map(|p| {
+            p.install(|| {
+                measure_fluid::<f64>(grainflow::lbm::Collision::Bgk, false, st::LBM_SIZE, 0.2)
+            })
+        })
+        .unwrap_or(f64::NAN);
+    let threads = rayon::current_num_threads();
+    format!(
+        "stability maps: {runs} fluid runs of {0}² cells × {1} steps (at most about {2} on {threads}          thread(s) at the measured {3:.0} MLUPS per thread), then {4} DEM and {5} MPM runs",
+        st::LBM_SIZE,
+        st::LBM_STEPS,
+        human(cells / (one * threads as f64)),
+        one / 1e6,
+        st::LAMBDAS.len(),
+        st::COURANTS.len()
+    )
 }
 
 /// `grainflow run`: any kind of scene, on every rank of the launch.
@@ -404,7 +450,7 @@ fn stopped_before_start(
     header.error = Some(why.clone());
     if comm.is_root() {
         grainflow::io::atomic::ensure_writable_dir(out)?;
-        let json = serde_json::to_vec_pretty(&header).context("writing summary.json")?;
+        let json = grainflow::summary_units::summary_json(&header);
         grainflow::io::atomic::write_atomic(&out.join("summary.json"), &json)?;
         eprintln!("error: {why}");
     }

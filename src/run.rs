@@ -650,7 +650,7 @@ fn summarise<T: Real + hdf5::H5Type>(
         for s in &sim.series {
             s.write_csv(out_dir)?;
         }
-        let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");
+        let json = crate::summary_units::summary_json(&summary);
         write_atomic(&out_dir.join("summary.json"), &json)?;
     }
     comm.barrier();

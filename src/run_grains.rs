@@ -410,7 +410,7 @@ fn summarise(
         snapshots: st.writer.snapshots(),
     };
     if comm.is_root() {
-        let json = serde_json::to_vec_pretty(&summary).expect("summary serialises");
+        let json = crate::summary_units::summary_json(&summary);
         write_atomic(&out_dir.join("summary.json"), &json)?;
     }
     Ok(summary)

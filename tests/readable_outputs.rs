@@ -88,6 +88,24 @@ fn assert_attribute_types(file: &Path) {
     }
 }
 
+/// Every number in `dir/summary.json` has a unit: its key's suffix or `quantity_units`.
+fn assert_units_named(dir: &Path) {
+    let s = summary(dir);
+    let unnamed = grainflow::summary_units::unnamed_units(&s);
+    assert!(
+        unnamed.is_empty(),
+        "{}: numbers without a unit: {unnamed:?}",
+        dir.display()
+    );
+    assert!(s["quantity_units"].is_object());
+    // Counts are integers.
+    for key in ["steps", "ranks", "threads", "snapshots"] {
+        if !s[key].is_null() {
+            assert!(s[key].is_u64(), "{key} = {}", s[key]);
+        }
+    }
+}
+
 /// Width and height of a PNG.
 fn png_size(path: &Path) -> (u32, u32) {
     let bytes = std::fs::read(path).unwrap();
@@ -171,6 +189,7 @@ fn fluid_outputs_open_in_paraview_and_pictures_explain_themselves() {
         assert!(stdout.contains(name), "the listing lacks {name}:\n{stdout}");
     }
     assert!(stdout.contains("pictures/ (8 PNG)"), "{stdout}");
+    assert_units_named(&out);
     // Run again into the same folder with fewer snapshots: no stale picture stays, and the
     // scene's picture options apply.
     let text = text
@@ -206,6 +225,7 @@ fn grain_and_mpm_outputs_open_in_paraview() {
     assert!(assert_xdmf_resolves(&grains, "grains.xdmf") >= 3);
     assert_attribute_types(&grains.join("grains.h5"));
     assert!(pictures(&grains).len() >= 2);
+    assert_units_named(&grains);
     let mpm = tmp.path().join("mpm");
     run(
         root()
@@ -220,6 +240,15 @@ fn grain_and_mpm_outputs_open_in_paraview() {
     let xdmf = std::fs::read_to_string(mpm.join("mpm.xdmf")).unwrap();
     assert!(xdmf.contains("Name=\"stress\" AttributeType=\"Tensor\""));
     assert_attribute_types(&mpm.join("mpm.h5"));
+    assert_units_named(&mpm);
+    // A coupled run (the settling disk, a few steps).
+    let coupled = tmp.path().join("coupled");
+    run(
+        root().join("jobs/settling/disk-8.toml").to_str().unwrap(),
+        &coupled,
+        &["--steps", "20"],
+    );
+    assert_units_named(&coupled);
     let (w, h) = png_size(&mpm.join("pictures").join(&pictures(&mpm)[0]));
     assert!(w >= 640 && w % 2 == 0 && h % 2 == 0);
 }

@@ -23,6 +23,6 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     for ranks in [1, 3] {
-        let _ = grainflow::check::assess(&any, ranks, Some(NODE_MEMORY));
+        let _ = grainflow::check::assess(&any, ranks, Some(NODE_MEMORY), false);
     }
 });

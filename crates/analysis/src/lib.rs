@@ -10,6 +10,7 @@ pub mod permeability;
 pub mod sedimentation;
 mod share;
 mod signals;
+pub mod units;
 pub use share::share_from_root;
 
 use io::probes::Series;

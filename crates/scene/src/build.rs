@@ -129,11 +129,7 @@ pub fn build_lattice(v: &ValidScene) -> Result<BuiltGeometry, SceneError> {
         }
         obstacle_cells.push(taken);
     }
-    let collision = match s.fluid.collision {
-        CollisionModel::Bgk => Collision::Bgk,
-        CollisionModel::Trt { magic } => Collision::Trt { magic },
-        CollisionModel::Mrt { s_e, s_eps, s_q } => Collision::Mrt { s_e, s_eps, s_q },
-    };
+    let collision = lattice_collision(&s.fluid.collision);
     let g = s.fluid.body_acceleration_m_s2;
     let setup = LatticeSetup {
         nx,
@@ -191,4 +187,13 @@ fn load_mask(path: &std::path::Path, nx: usize, ny: usize) -> Result<Vec<bool>, 
         }
     }
     Ok(mask)
+}
+
+/// The lattice's collision operator for a scene's `[fluid] collision`.
+pub fn lattice_collision(model: &CollisionModel) -> Collision {
+    match *model {
+        CollisionModel::Bgk => Collision::Bgk,
+        CollisionModel::Trt { magic } => Collision::Trt { magic },
+        CollisionModel::Mrt { s_e, s_eps, s_q } => Collision::Mrt { s_e, s_eps, s_q },
+    }
 }

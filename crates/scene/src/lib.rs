@@ -23,7 +23,7 @@ mod schema;
 mod unknown;
 mod validate;
 
-pub use build::{build_lattice, solid_id_of, BuiltGeometry};
+pub use build::{build_lattice, lattice_collision, solid_id_of, BuiltGeometry};
 pub use grains::*;
 pub use grains_check::{grain_result_names, parse_grains, size_distribution, ValidGrainScene};
 pub use lbm::gpu::GpuStorage;
