@@ -69,6 +69,10 @@ pub struct RunHeader {
     pub steps: u64,
     /// Simulated time at the end (s).
     pub simulated_time_s: f64,
+    /// When the run stopped before its length because the motion settled (its kinetic
+    /// energy below the scene's `[run] stop_below_…` threshold), the simulated time (s);
+    /// `null` when it ran its length (or stopped otherwise).
+    pub settled_at_s: Option<f64>,
     /// Wall time of the time loop (s).
     pub wall_time_s: f64,
     /// Seconds per stage, the slowest rank's (what bounds the run).
@@ -122,6 +126,7 @@ impl RunHeader {
             restarted_from_step: 0,
             steps: 0,
             simulated_time_s: 0.0,
+            settled_at_s: None,
             wall_time_s: 0.0,
             stage_seconds: BTreeMap::new(),
             stages: BTreeMap::new(),

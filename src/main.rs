@@ -460,6 +460,13 @@ fn stopped_before_start(
 /// Print a run's results, checks, output folder with every file the run wrote, and any
 /// error or restart hint; returns the exit code.
 fn report(run: &RunHeader, out: &std::path::Path) -> i32 {
+    if let Some(t) = run.settled_at_s {
+        println!(
+            "stopped early at t = {t:.4} s (step {}): the motion settled, its kinetic energy \
+             below the scene's [run] stop threshold",
+            run.steps
+        );
+    }
     for (k, v) in &run.results {
         println!("  {k} = {v:.6e}");
     }

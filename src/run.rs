@@ -208,16 +208,19 @@ impl<T: Real + hdf5::H5Type> Stepper for FluidStepper<'_, T> {
         if probe {
             self.sim.record_probes(comm);
         }
-        if due.snapshot {
-            // The snapshot's fields (read after the probes, as the snapshot read them), their
-            // speeds checked: a run can go wrong with every density positive (a flow
-            // accelerated past the lattice's speed of sound).
+        if due.snapshot || due.checkpoint {
+            // The fields (read after the probes, as the snapshot reads them), their speeds
+            // checked: a run can go wrong with every density positive (a flow accelerated
+            // past the lattice's speed of sound), and no snapshot or checkpoint keeps such a
+            // state as if it were good.
             let f = self.sim.fields(comm);
             let x0 = self.sim.fluid.lattice().x_offset();
             if let Some(e) = supersonic_cell(&f, x0, due.step, comm) {
                 return Ok(Flow::Unstable(e));
             }
-            self.snapshot_fields = Some(f);
+            if due.snapshot {
+                self.snapshot_fields = Some(f);
+            }
         }
         Ok(Flow::Go)
     }

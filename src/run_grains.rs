@@ -265,7 +265,11 @@ pub fn run_grains(
         writer,
         picture: io::figure::PictureStyle {
             size_px: s.output.picture_size_px(),
-            limit: s.output.picture_limits().speed_m_s.unwrap_or(frame_speed),
+            limit: s
+                .output
+                .picture_limits()
+                .speed_m_s
+                .unwrap_or(io::figure::round_up(frame_speed)),
         },
         collapse_at,
         fronts: Vec::new(),
@@ -332,7 +336,9 @@ fn collapse_analysis(st: &GrainStepper, end: &LoopEnd, g_abs: f64, comm: &dyn Co
         } = a;
         let before = pile_shape(&initial.x, &initial.y, &initial.r, *wall_x_m, *floor_y_m);
         let after = pile_shape(&fin.x, &fin.y, &fin.r, *wall_x_m, *floor_y_m);
-        let flow_time = end.settled_s.unwrap_or(st.d.system.time) - st.last_removal;
+        // The time the motion stopped; NaN when it did not stop before the run's end (the
+        // end is not a stop time).
+        let flow_time = end.settled_s.map_or(f64::NAN, |t| t - st.last_removal);
         let values = collapse_results(before, after, g_abs, flow_time);
         for (k, v) in QUANTITIES.iter().zip(values) {
             results.insert(format!("collapse.{k}"), v);
@@ -385,6 +391,7 @@ fn summarise(
     header.restarted_from_step = end.start_step;
     header.steps = d.system.steps;
     header.simulated_time_s = d.system.time;
+    header.settled_at_s = end.settled_s;
     header.wall_time_s = end.wall_s;
     header.set_stages(&[&st.clock, &end.clock], comm);
     header.checkpoints = end.checkpoints.clone();

@@ -302,14 +302,23 @@ pub fn run_mpm(
     }
     let start_totals = sys.totals(comm)?;
     let writer = MpmWriter::open(&opts.out_dir, &sys, comm, resume.map(|r| r.step))?;
-    // Colour scale: free-fall speed over the domain height, or plastic strain 0–1.
+    // Colour scale unless the scene sets it: the free-fall speed over the bodies' height
+    // (rounded up), or plastic strain 0–1.
     let g_abs = s.mpm.gravity_m_s2[0].hypot(s.mpm.gravity_m_s2[1]);
+    let ys = scene.points.pos.iter().map(|p| p[1]);
+    let body_height =
+        ys.clone().fold(f64::NEG_INFINITY, f64::max) - ys.fold(f64::INFINITY, f64::min);
+    let height = if body_height > 0.0 {
+        body_height
+    } else {
+        spec.height()
+    };
     let limits = s.output.picture_limits();
     let vmax = match s.output.picture_field() {
         PictureField::PlasticStrain => limits.plastic_strain.unwrap_or(1.0),
-        _ => limits
-            .speed_m_s
-            .unwrap_or((2.0 * g_abs * spec.height()).sqrt().max(1e-9)),
+        _ => limits.speed_m_s.unwrap_or(io::figure::round_up(
+            (2.0 * g_abs * height).sqrt().max(1e-9),
+        )),
     };
     let dt = sys.setup.dt;
     let mut progress = Progress::new(
@@ -416,6 +425,7 @@ fn summarise(
     header.restarted_from_step = end.start_step;
     header.steps = sys.steps;
     header.simulated_time_s = sys.time;
+    header.settled_at_s = end.settled_s;
     header.wall_time_s = end.wall_s;
     let solver = StageClock::with_seconds(&MPM_STAGES, &sys.seconds);
     header.set_stages(&[&solver, &st.clock, &end.clock], comm);

@@ -325,3 +325,27 @@ fn a_flow_past_the_speed_of_sound_stops_the_run() {
     assert!(text.contains("unstable at step 50: cell (0, 0)"), "{text}");
     assert!(text.contains("speed of sound"), "{text}");
 }
+
+/// The same flow with snapshots only at its ends and a checkpoint every 10 steps: the speeds
+/// are checked before every checkpoint too, so the run still stops at step 50, and no
+/// checkpoint keeps the state past the speed of sound as if it were good.
+#[test]
+fn a_checkpoint_never_keeps_a_flow_past_the_speed_of_sound() {
+    let scene = GOOD
+        .replace(
+            "lattice_velocity = 0.05",
+            "lattice_velocity = 0.05\nbody_acceleration_m_s2 = [0.05, 0.0]",
+        )
+        .replace("kind = \"wall\" }", "kind = \"periodic\" }")
+        .replace(
+            "north = { kind = \"moving-wall\", velocity_m_s = [0.01, 0.0] }",
+            "north = { kind = \"periodic\" }",
+        )
+        .replace(
+            "steps = 20",
+            "steps = 200\n\n[output]\ncheckpoint_every_steps = 10\npictures = false",
+        );
+    let (code, text, _d) = grainflow(&scene, &[]);
+    assert_eq!(code, 3, "{text}");
+    assert!(text.contains("unstable at step 50: cell (0, 0)"), "{text}");
+}

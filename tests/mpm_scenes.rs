@@ -45,7 +45,7 @@ fn mpm_run_writes_hdf5_xdmf_pictures_and_summary() {
     assert_eq!(n, 1600);
     for (name, shape) in [
         ("position", vec![n, 3]),
-        ("stress", vec![n, 4]),
+        ("stress", vec![n, 9]),
         ("plastic_strain", vec![n, 1]),
     ] {
         assert_eq!(last.dataset(name).unwrap().shape(), shape, "{name}");

@@ -91,6 +91,8 @@ pub fn human(seconds: f64) -> String {
         return "unknown".into();
     }
     match seconds {
+        s if s < 1.0 => "under 1 s".into(),
+        s if s < 10.0 => format!("{s:.1} s"),
         s if s < 90.0 => format!("{s:.0} s"),
         s if s < 5400.0 => format!("{:.0} min", s / 60.0),
         s if s < 172_800.0 => format!("{:.1} h", s / 3600.0),
@@ -105,6 +107,8 @@ mod tests {
     #[test]
     fn times_read_naturally() {
         assert_eq!(human(40.0), "40 s");
+        assert_eq!(human(0.3), "under 1 s");
+        assert_eq!(human(2.25), "2.2 s");
         assert_eq!(human(720.0), "12 min");
         assert_eq!(human(3.5 * 3600.0), "3.5 h");
         assert_eq!(human(3.0 * 86400.0), "3.0 days");

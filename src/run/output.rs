@@ -180,11 +180,12 @@ impl Pictures {
         // Defaults from the scene's own scales (docs/outputs.md): 1.5 U for the speed,
         // 10 U/L for the vorticity, the larger of ρU² and the hydrostatic ρ g H for the
         // pressure.
-        let speed = limits.speed_m_s.unwrap_or(1.5 * u_ref);
-        let vorticity = limits.vorticity_1_s.unwrap_or(10.0 * u_ref / l_ref);
+        let round = io::figure::round_up;
+        let speed = limits.speed_m_s.unwrap_or(round(1.5 * u_ref));
+        let vorticity = limits.vorticity_1_s.unwrap_or(round(10.0 * u_ref / l_ref));
         let pressure = limits
             .pressure_pa
-            .unwrap_or((rho * u_ref * u_ref).max(rho * g * height));
+            .unwrap_or(round((rho * u_ref * u_ref).max(rho * g * height)));
         let chosen = match o.picture_field {
             Some(f) => vec![f],
             None => vec![PictureField::Speed, PictureField::Vorticity],

@@ -243,6 +243,21 @@ fn length_scale(fig: &mut Image, metres_per_pixel: f64, x: usize, y: usize) {
     fig.text(&label, (x1 as usize) + 2 * PAD, y, ZOOM);
 }
 
+/// The smallest round value (1, 1.2, 1.5, 2, 2.5, 3, 4, 5, 6 or 8 × 10ᵏ) not below `v` (> 0):
+/// default colour limits, so that the colour bar's labels are round.
+pub fn round_up(v: f64) -> f64 {
+    if !(v > 0.0 && v.is_finite()) {
+        return v;
+    }
+    let exp = v.log10().floor() as i32;
+    let scale = 10f64.powi(exp);
+    [1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0]
+        .into_iter()
+        .map(|m| m * scale)
+        .find(|&r| r >= v * (1.0 - 1e-12))
+        .unwrap_or(10.0 * scale)
+}
+
 /// The largest 1, 2 or 5 × 10ᵏ not above `target` (> 0): (mantissa, k).
 pub fn round_length(target: f64) -> (f64, i32) {
     let exp = target.log10().floor() as i32;
@@ -387,6 +402,15 @@ mod tests {
         assert_eq!(f.size(), (800, 400));
         assert_eq!(f.pixel([0.0, 1.0]), [0.0, 0.0]);
         assert_eq!(f.pixel([2.0, 0.0]), [800.0, 400.0]);
+    }
+
+    #[test]
+    fn default_limits_round_up() {
+        assert_eq!(round_up(0.8764), 1.0);
+        assert_eq!(round_up(1.534), 2.0);
+        assert!((round_up(0.13) - 0.15).abs() < 1e-12);
+        assert_eq!(round_up(8.333), 10.0);
+        assert_eq!(round_up(2.0), 2.0);
     }
 
     #[test]

@@ -227,9 +227,9 @@ fn unit(ds: &hdf5::Dataset, units: &str) -> hdf5::Result<()> {
 }
 
 /// Draw the points of every rank into `path` (rank 0 writes; collective): each point as
-/// a filled square of its domain, on white framing the grid, coloured by `field` from 0 to
-/// `style.limit`, the sides that are not open drawn black, with a legend giving the time
-/// `time_s`.
+/// a filled square of its current area (at least its initial domain), on white framing the
+/// grid, coloured by `field` from 0 to `style.limit`, the sides that are not open drawn
+/// black, with a legend giving the time `time_s`.
 pub fn write_mpm_png(
     path: &Path,
     sys: &MpmSystem,
@@ -246,7 +246,9 @@ pub fn write_mpm_png(
             // Validation leaves speed or plastic strain to MPM scenes.
             _ => p.vel[i][0].hypot(p.vel[i][1]),
         };
-        local.extend_from_slice(&[p.pos[i][0], p.pos[i][1], p.half0[i], value]);
+        // Each point covers its current volume, so a stretched body shows no gaps.
+        let half = 0.5 * p.volume(i).sqrt();
+        local.extend_from_slice(&[p.pos[i][0], p.pos[i][1], half.max(p.half0[i]), value]);
     }
     let all = comm.all_gather_f64(&local);
     if !comm.is_root() {

@@ -52,6 +52,10 @@ pub enum CoupledVerdict {
     Stable(CoupledCase),
     /// No better than this measured failure.
     Unstable(CoupledCase),
+    /// No worse than this measured stable run except in τ, which is below the smallest τ
+    /// measured stable among such runs: judged likely unstable (the sweep's failures lie
+    /// there).
+    BelowStableTau(CoupledCase),
     /// Neither.
     Unmeasured,
 }
@@ -70,6 +74,16 @@ impl CoupledVerdict {
                  lattice, raise τ, or use psm",
                 c.scheme,
                 u.describe()
+            ),
+            CoupledVerdict::BelowStableTau(s) => format!(
+                "likely unstable ({}: τ = {:.4} is below the smallest τ measured stable, {}, \
+                 for runs no better than this one ({})): raise τ to at least {}, refine the \
+                 lattice, or use psm",
+                c.scheme,
+                c.tau,
+                s.tau,
+                s.describe(),
+                s.tau
             ),
             CoupledVerdict::Unmeasured => format!(
                 "outside the measured region ({}, {}; jobs/robustness/coupled-map.csv)",
@@ -115,13 +129,25 @@ pub fn verdict(map: &[(CoupledCase, bool)], case: &CoupledCase) -> CoupledVerdic
     {
         return CoupledVerdict::Unstable(u.clone());
     }
-    match map
+    if let Some((s, _)) = map
         .iter()
         .find(|(m, stable)| *stable && case.no_worse_than(m))
     {
-        Some((s, _)) => CoupledVerdict::Stable(s.clone()),
-        None => CoupledVerdict::Unmeasured,
+        return CoupledVerdict::Stable(s.clone());
     }
+    // Stable runs it matches in all but τ: it lies below every such run's τ (else it would
+    // be no worse than one), where the sweep found its failures.
+    let below = CoupledCase {
+        tau: f64::INFINITY,
+        ..case.clone()
+    };
+    map.iter()
+        .filter(|(m, stable)| *stable && below.no_worse_than(m))
+        .map(|(m, _)| m)
+        .min_by(|a, b| a.tau.total_cmp(&b.tau))
+        .map_or(CoupledVerdict::Unmeasured, |m| {
+            CoupledVerdict::BelowStableTau(m.clone())
+        })
 }
 
 #[cfg(test)]
@@ -163,5 +189,13 @@ mod tests {
         assert!(verdict(&map, &bad)
             .describe(&bad)
             .contains("likely unstable"));
+        // Between a measured failure (τ = 0.5024) and the smallest τ measured stable
+        // (0.512) at 8 cells per diameter: a user's settling disk at τ = 0.510 blew up
+        // there, and is judged likely unstable.
+        let gap = case("bounce-back", 8.0, 1.2, 0.510);
+        match verdict(&map, &gap) {
+            CoupledVerdict::BelowStableTau(m) => assert_eq!(m.tau, 0.512),
+            v => panic!("{v:?}"),
+        }
     }
 }
