@@ -305,20 +305,7 @@ fn strouhal_transient_longer_than_the_run_is_rejected() {
 /// run to the end and report `ok` with the fluid at 2.5 cells per step.
 #[test]
 fn a_flow_past_the_speed_of_sound_stops_the_run() {
-    let scene = GOOD
-        .replace(
-            "lattice_velocity = 0.05",
-            "lattice_velocity = 0.05\nbody_acceleration_m_s2 = [0.05, 0.0]",
-        )
-        .replace("kind = \"wall\" }", "kind = \"periodic\" }")
-        .replace(
-            "north = { kind = \"moving-wall\", velocity_m_s = [0.01, 0.0] }",
-            "north = { kind = \"periodic\" }",
-        )
-        .replace(
-            "steps = 20",
-            "steps = 200\n\n[output]\nevery_steps = 10\npictures = false",
-        );
+    let scene = supersonic("every_steps = 10");
     assert!(scene.contains("south = { kind = \"periodic\" }"));
     let (code, text, _d) = grainflow(&scene, &[]);
     assert_eq!(code, 3, "{text}");
@@ -326,26 +313,48 @@ fn a_flow_past_the_speed_of_sound_stops_the_run() {
     assert!(text.contains("speed of sound"), "{text}");
 }
 
+/// The tiny box, periodic all round, under a body force that speeds it up without bound,
+/// for 200 steps with `output` (an `[output]` cadence) and no pictures.
+fn supersonic(output: &str) -> String {
+    GOOD.replace(
+        "lattice_velocity = 0.05",
+        "lattice_velocity = 0.05\nbody_acceleration_m_s2 = [0.05, 0.0]",
+    )
+    .replace("kind = \"wall\" }", "kind = \"periodic\" }")
+    .replace(
+        "north = { kind = \"moving-wall\", velocity_m_s = [0.01, 0.0] }",
+        "north = { kind = \"periodic\" }",
+    )
+    .replace(
+        "steps = 20",
+        &format!("steps = 200\n\n[output]\n{output}\npictures = false"),
+    )
+}
+
 /// The same flow with snapshots only at its ends and a checkpoint every 10 steps: the speeds
 /// are checked before every checkpoint too, so the run still stops at step 50, and no
 /// checkpoint keeps the state past the speed of sound as if it were good.
 #[test]
 fn a_checkpoint_never_keeps_a_flow_past_the_speed_of_sound() {
-    let scene = GOOD
-        .replace(
-            "lattice_velocity = 0.05",
-            "lattice_velocity = 0.05\nbody_acceleration_m_s2 = [0.05, 0.0]",
-        )
-        .replace("kind = \"wall\" }", "kind = \"periodic\" }")
-        .replace(
-            "north = { kind = \"moving-wall\", velocity_m_s = [0.01, 0.0] }",
-            "north = { kind = \"periodic\" }",
-        )
-        .replace(
-            "steps = 20",
-            "steps = 200\n\n[output]\ncheckpoint_every_steps = 10\npictures = false",
-        );
+    let scene = supersonic("checkpoint_every_steps = 10");
     let (code, text, _d) = grainflow(&scene, &[]);
     assert_eq!(code, 3, "{text}");
     assert!(text.contains("unstable at step 50: cell (0, 0)"), "{text}");
+}
+
+/// An error quotes its cause once: a missing scene file said "No such file or directory"
+/// twice (the message quoted its cause, and the cause chain repeated it).
+#[test]
+fn an_error_names_its_cause_once() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_grainflow"))
+        .args(["check", "/nonexistent/scene.toml"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot read scene file /nonexistent/scene.toml"),
+        "{err}"
+    );
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
 }

@@ -43,29 +43,7 @@ impl Rates {
 /// periodic `n` × `n` box (512: larger than the caches, as a real lattice is), in place or
 /// with two arrays, stepped for at least `seconds`. Cell updates per second.
 pub fn measure_fluid<T: Real>(collision: Collision, in_place: bool, n: usize, seconds: f64) -> f64 {
-    let setup = LatticeSetup {
-        nx: n,
-        ny: n,
-        cells: vec![0; n * n],
-        faces: [
-            FaceCondition::Periodic,
-            FaceCondition::Periodic,
-            FaceCondition::Periodic,
-            FaceCondition::Periodic,
-        ],
-        solids: vec![],
-        collision,
-        tau0: 0.6,
-        smagorinsky: None,
-        force: [0.0, 0.0],
-    };
-    let mut lat = Lattice::<T>::new(setup);
-    for y in 0..n {
-        for x in 0..n {
-            let a = std::f64::consts::TAU * (x + 2 * y) as f64 / n as f64;
-            lat.set_equilibrium(x, y, 1.0, [0.02 * a.sin(), 0.02 * a.cos()]);
-        }
-    }
+    let mut lat = periodic_box::<T>(n, n, collision);
     if in_place {
         lat.make_in_place();
     }
@@ -83,6 +61,41 @@ pub fn measure_fluid<T: Real>(collision: Collision, in_place: bool, n: usize, se
         steps += 2;
     }
     (n * n) as f64 * steps as f64 / t.elapsed().as_secs_f64().max(1e-9)
+}
+
+/// A fully periodic `nx` × `ny` box (τ = 0.6) holding a smooth 2-D shear flow (u ≤ 0.05),
+/// halos filled, ready to step: the lattice the speed measurements (here and in
+/// `benches/`) run.
+pub fn periodic_box<T: Real>(nx: usize, ny: usize, collision: Collision) -> Lattice<T> {
+    let setup = LatticeSetup {
+        nx,
+        ny,
+        cells: vec![0; nx * ny],
+        faces: [
+            FaceCondition::Periodic,
+            FaceCondition::Periodic,
+            FaceCondition::Periodic,
+            FaceCondition::Periodic,
+        ],
+        solids: vec![],
+        collision,
+        tau0: 0.6,
+        smagorinsky: None,
+        force: [0.0, 0.0],
+    };
+    let mut l = Lattice::<T>::new(setup);
+    for y in 0..ny {
+        for x in 0..nx {
+            let (a, b) = (x as f64 / nx as f64, y as f64 / ny as f64);
+            let u = [
+                0.05 * (std::f64::consts::TAU * b).sin(),
+                0.05 * (std::f64::consts::TAU * a).sin(),
+            ];
+            l.set_equilibrium(x, y, 1.0, u);
+        }
+    }
+    l.update_boundaries();
+    l
 }
 
 /// A wall time (s) as a reader wants it: "40 s", "12 min", "3.5 h", "2.1 days".
