@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Install what grainflow needs on Debian 12, idempotently and quietly when it is already there:
-# Open MPI, parallel HDF5 (+ h5dump), libclang (bindgen), pkg-config, Mesa lavapipe (CPU Vulkan).
+# Open MPI, parallel HDF5 (+ h5dump), libclang (bindgen), pkg-config, Mesa lavapipe (CPU Vulkan),
+# ffmpeg (movies of the picture series; optional for users, tested in CI).
 set -euo pipefail
-PKGS=(libhdf5-openmpi-dev libopenmpi-dev openmpi-bin libclang-dev pkg-config mesa-vulkan-drivers libvulkan1 hdf5-tools)
+PKGS=(libhdf5-openmpi-dev libopenmpi-dev openmpi-bin libclang-dev pkg-config mesa-vulkan-drivers libvulkan1 hdf5-tools ffmpeg)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

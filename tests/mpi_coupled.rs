@@ -121,6 +121,8 @@ fn pictures(dir: &Path) -> Vec<(String, Vec<u8>)> {
             let name = p.file_name().unwrap().to_string_lossy().into_owned();
             (name, std::fs::read(&p).unwrap())
         })
+        // The PNGs (with ffmpeg present, the series' movies lie beside them).
+        .filter(|(name, _)| name.ends_with(".png"))
         .collect();
     out.sort();
     out

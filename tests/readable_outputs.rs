@@ -251,4 +251,19 @@ fn grain_and_mpm_outputs_open_in_paraview() {
     assert_units_named(&coupled);
     let (w, h) = png_size(&mpm.join("pictures").join(&pictures(&mpm)[0]));
     assert!(w >= 640 && w % 2 == 0 && h % 2 == 0);
+    // With ffmpeg on the PATH (scripts/setup.sh installs it), the series becomes a movie.
+    let ffmpeg = std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if ffmpeg {
+        let movie = mpm.join("pictures/mpm_step.mp4");
+        assert!(
+            std::fs::metadata(&movie).is_ok_and(|m| m.len() > 1000),
+            "no movie at {}",
+            movie.display()
+        );
+    } else {
+        eprintln!("ffmpeg is not on the PATH: the movie is not tested");
+    }
 }

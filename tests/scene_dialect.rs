@@ -105,8 +105,28 @@ fn keys_of_the_old_dialects_are_refused_with_their_replacement() {
 #[test]
 fn output_keys_of_another_solver_are_refused() {
     let dir = tempfile::tempdir().unwrap();
+    // Every kind draws pictures, each its own fields and limits.
+    for (scene, key, why) in [
+        (
+            FLUID,
+            "picture_field = \"plastic-strain\"",
+            "picture_field \"plastic-strain\" is not drawn in this kind of scene; use one of \"speed\", \"vorticity\", \"pressure\"",
+        ),
+        (
+            GRAINS,
+            "picture_limits = { pressure_pa = 5.0 }",
+            "picture_limits.pressure_pa: this kind of scene draws no pressure picture",
+        ),
+        (
+            MPM,
+            "picture_size_px = 10",
+            "picture_size_px must be from 64 to 8192 pixels, got 10",
+        ),
+    ] {
+        let e = load_error(&with_in_table(&read(scene), "output", key), dir.path());
+        assert!(e.contains(why), "{scene}, {key}: {e}");
+    }
     for (scene, key, owner) in [
-        (FLUID, "picture_field = \"speed\"", "MPM"),
         (GRAINS, "fields = [\"density\"]", "fluid"),
         (GRAINS, "probe_every_steps = 2", "fluid"),
         (MPM, "compression = 1", "fluid"),
