@@ -30,11 +30,26 @@ fn main() {
             // One write of the whole line: under mpirun, ranks that fail together then never
             // interleave inside each other's message (a write under 4 KiB to a pipe is atomic).
             use std::io::Write;
-            let line = format!("error: {e:#}\n");
+            let line = format!("error: {}\n", describe(&e));
             let _ = std::io::stderr().write_all(line.as_bytes());
             std::process::exit(1);
         }
     }
+}
+
+/// An error with its causes, each cause once: the libraries' messages often quote their
+/// cause already ("cannot read scene file …: No such file or directory"), and the chain
+/// would repeat it.
+fn describe(e: &anyhow::Error) -> String {
+    let mut out = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !out.contains(&c) {
+            out.push_str(": ");
+            out.push_str(&c);
+        }
+    }
+    out
 }
 
 /// The communicator of this process: MPI when started by a launcher (mpirun, srun),
