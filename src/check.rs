@@ -53,9 +53,14 @@ fn assess_into(
     (ranks, memory, timed): (usize, Option<f64>, bool),
     out: &mut Vec<String>,
 ) -> Result<i32, RunError> {
+    // A coupled scene's grains and DEM sub-steps per fluid step, from the coupling plan
+    // `print_check` reads (for the wall-time estimate).
+    let mut dem_load = None;
     let cost = match any {
         scene::AnyScene::Fluid(s) => {
-            if !print_check(s, out) {
+            let (stable, load) = print_check(s, out);
+            dem_load = load;
+            if !stable {
                 say!(
                     out,
                     "  refused: the coupled run is likely unstable (see above)"
@@ -104,7 +109,11 @@ fn assess_into(
     };
     say!(out, "  steps: {}", cost.steps);
     if timed {
-        say!(out, "  wall time: {}", wall_time(any, cost.steps, ranks));
+        say!(
+            out,
+            "  wall time: {}",
+            wall_time(any, dem_load, cost.steps, ranks)
+        );
     }
     say!(
         out,
@@ -125,8 +134,14 @@ fn assess_into(
 }
 
 /// The estimated wall time of a run of `steps` steps, on this machine and on `ranks` ranks
-/// of its size, with what it counts.
-fn wall_time(any: &scene::AnyScene, steps: u64, ranks: usize) -> String {
+/// of its size, with what it counts; `dem_load` is a coupled scene's (grains, DEM sub-steps
+/// per fluid step).
+fn wall_time(
+    any: &scene::AnyScene,
+    dem_load: Option<(f64, u32)>,
+    steps: u64,
+    ranks: usize,
+) -> String {
     use budget::walltime::{human, measure_fluid, Rates};
     let threads = rayon::current_num_threads();
     let (work_s, basis) = match any {
@@ -134,30 +149,29 @@ fn wall_time(any: &scene::AnyScene, steps: u64, ranks: usize) -> String {
             let collision = scene::lattice_collision(&s.scene.fluid.collision);
             let one = crate::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
             let [nx, ny] = s.scene.domain.cells;
-            // A box of the scene's cell count, up to 512² (a small lattice runs slower per
-            // cell: the per-step costs weigh more).
-            let n = ((nx as f64 * ny as f64).sqrt() as usize).clamp(32, 512);
+            // A 512² box, larger than the caches as production lattices are; small lattices
+            // run slower per cell than it (their per-step costs weigh more) and are
+            // underestimated, as docs/scenes.md says.
             let rate = match s.scene.run.precision {
-                Precision::F32 => measure_fluid::<f32>(collision, one, n, 0.3),
-                Precision::F64 => measure_fluid::<f64>(collision, one, n, 0.3),
+                Precision::F32 => measure_fluid::<f32>(collision, one, 512, 0.3),
+                Precision::F64 => measure_fluid::<f64>(collision, one, 512, 0.3),
             };
             let rates = Rates::with_fluid(rate, threads);
             let fluid = (nx * ny) as f64 * steps as f64 / rates.fluid_cells_per_s;
-            match crate::coupled::plan(s) {
-                Ok(Some(p)) => {
-                    let grains = p.grains.unwrap_or(0) as f64;
-                    let dem = grains * (p.substeps as f64) * steps as f64 / rates.grain_steps_per_s;
+            match dem_load {
+                Some((grains, substeps)) => {
+                    let dem = grains * substeps as f64 * steps as f64 / rates.grain_steps_per_s;
                     (
                         fluid + dem,
                         format!(
                             "the fluid at {:.0} MLUPS measured here and {} DEM sub-steps; the \
                              coupling stage adds 10–100 % more, growing with the grains",
                             rate / 1e6,
-                            p.substeps
+                            substeps
                         ),
                     )
                 }
-                _ => (
+                None => (
                     fluid,
                     format!("the fluid kernel measured here at {:.0} MLUPS", rate / 1e6),
                 ),
@@ -256,9 +270,10 @@ fn dem_verdict(lambda: f64) -> String {
     }
 }
 
-/// What `check` prints about a fluid (or coupled) scene; false when the coupled stability
-/// map says the run is likely unstable.
-fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
+/// What `check` prints about a fluid (or coupled) scene: false when the coupled stability
+/// map says the run is likely unstable, and a coupled scene's (grains, DEM sub-steps per
+/// fluid step).
+fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> (bool, Option<(f64, u32)>) {
     let u = &s.units;
     let [nx, ny] = s.scene.domain.cells;
     say!(
@@ -318,8 +333,10 @@ fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
         if one { ", in place" } else { "s" }
     );
     let mut stable = true;
+    let mut load = None;
     match crate::coupled::plan(s) {
         Ok(Some(p)) => {
+            load = Some((p.grains.unwrap_or(0) as f64, p.substeps));
             say!(
                 out,
                 "  coupling         {} with {} DEM sub-steps per fluid step (Δt_D = {:.4e} s){}",
@@ -366,5 +383,5 @@ fn print_check(s: &scene::ValidScene, out: &mut Vec<String>) -> bool {
     for w in &s.warnings {
         say!(out, "  warning: {w}");
     }
-    stable
+    (stable, load)
 }

@@ -62,14 +62,11 @@ const KEY_UNITS: [(&str, &str); 35] = [
 /// Sections whose numbers are all in one unit or name it themselves.
 const SKIPPED: [&str; 3] = ["scene", "stage_seconds", "stages"];
 
-/// The unit of the number at `path` (dotted keys, no indices), if known.
+/// The unit of the number at `path` (dotted keys, no indices) whose key does not state it
+/// ([`self_described`]), if known.
 fn unit_of(path: &str) -> Option<String> {
-    let last = path.rsplit('.').next().unwrap_or(path);
     if let Some(result) = path.strip_prefix("results.") {
         return result_unit(result).map(str::to_string);
-    }
-    if path.starts_with("probes.") || suffix_unit(last).is_some() || last.ends_with("_bytes") {
-        return None;
     }
     KEY_UNITS
         .iter()

@@ -70,9 +70,6 @@ pub fn draw_walls(img: &mut Image, [west, east, south, north]: WallFaces) {
     }
 }
 
-/// The default size of a picture's panel: its longer side (pixels).
-pub const DEFAULT_SIZE_PX: usize = 1024;
-
 /// Encode `rgb` (8-bit RGB, `w` × `h`, rows from the top) as a PNG written atomically.
 pub fn write_rgb_png(path: &Path, w: usize, h: usize, rgb: &[u8]) -> Result<(), OutputError> {
     let mut bytes = Vec::new();
