@@ -97,3 +97,75 @@ fn a_smaller_hydrodynamic_radius_lowers_the_drag_and_not_the_contacts() {
         speed[0]
     );
 }
+
+/// A landslide scene's mistakes are refused naming their key: a hydrodynamic radius outside
+/// (0, 1], a gate that opens after the run or stands away from the mass (it releases
+/// nothing), a wall through the packing rectangle (grains packed into the bed) and a bed
+/// longer than the domain.
+#[test]
+fn landslide_mistakes_name_their_key() {
+    let text = std::fs::read_to_string(common::root().join(scene("sub-small-loose"))).unwrap();
+    let gate = "name = \"gate\"\nfrom_m = [0.0300, 0.0]\nto_m = [0.0300, 0.0220]";
+    assert!(text.contains(gate) && text.contains("remove_at_s = 0.0\n"));
+    let cases = [
+        (
+            text.replacen(
+                "[coupling]\n",
+                "[coupling]\nhydrodynamic_radius_ratio = 1.2\n",
+                1,
+            ),
+            vec!["hydrodynamic_radius_ratio"],
+        ),
+        (
+            text.replace("remove_at_s = 0.0\n", "remove_at_s = 2.0\n"),
+            vec![
+                "`remove_at_s`",
+                "gate `gate` opens at 2 s",
+                "releases nothing",
+            ],
+        ),
+        (
+            text.replace(
+                gate,
+                "name = \"gate\"\nfrom_m = [0.0400, 0.0]\nto_m = [0.0400, 0.0220]",
+            ),
+            vec![
+                "`remove_at_s`",
+                "stands 0.0100 m from the packing rectangle",
+            ],
+        ),
+        (
+            text.replace(
+                "name = \"bed\"\nfrom_m = [0.0, 0.0]\nto_m = [0.1500, 0.0]",
+                "name = \"bed\"\nfrom_m = [0.0, 0.005]\nto_m = [0.1500, 0.005]",
+            ),
+            vec![
+                "`from_m`",
+                "wall `bed`",
+                "runs through the packing rectangle",
+            ],
+        ),
+        (
+            text.replace(
+                "name = \"bed\"\nfrom_m = [0.0, 0.0]\nto_m = [0.1500, 0.0]",
+                "name = \"bed\"\nfrom_m = [0.0, 0.0]\nto_m = [0.2000, 0.0]",
+            ),
+            vec!["`to_m`", "wall `bed`", "reaches outside the fluid domain"],
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (k, (t, needles)) in cases.iter().enumerate() {
+        assert_ne!(t, &text, "case {k} changed nothing");
+        let path = dir.path().join(format!("bad{k}.toml"));
+        std::fs::write(&path, t).unwrap();
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_grainflow"))
+            .args(["check", path.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "case {k}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "case {k}: expected `{n}` in {err}");
+        }
+    }
+}

@@ -96,6 +96,34 @@ pub(super) fn validate(
     }
     let gs = grain_scene(scene, spec, ctx.base_dir, ctx.path);
     warnings.extend(super::grains_check::validate(&gs.scene, ctx)?);
+    let run_end_s = scene
+        .run
+        .end_time_s
+        .or(scene.run.steps.map(|n| n as f64 * units.dt_s));
+    super::gates::validate(spec, run_end_s, ctx)?;
+    // A wall may overhang the domain by a grain radius or a cell (its ends are rounded in
+    // the file); a bed that reaches further is not the domain's.
+    let size = gs.scene.domain.size();
+    let slack = radius_range(&spec.sample)
+        .map_or(0.0, |r| r.1)
+        .max(units.dx_m);
+    let outside = |p: &[f64; 2]| (0..2).any(|k| p[k] < -slack || p[k] > size[k] + slack);
+    if let Some((n, w)) = spec
+        .walls
+        .iter()
+        .enumerate()
+        .find(|(_, w)| outside(&w.from_m) || outside(&w.to_m))
+    {
+        return Err(ctx.err(
+            if outside(&w.from_m) { "from_m" } else { "to_m" },
+            n,
+            format!(
+                "wall `{}` ({:?}–{:?} m) reaches outside the fluid domain [0, 0]–{size:?} m, \
+                 where no grain can be: shorten it, or enlarge the domain",
+                w.name, w.from_m, w.to_m
+            ),
+        ));
+    }
     if let SampleSpec::Pack { min_m, max_m, .. } = &spec.sample {
         let hi = gs.scene.domain.size();
         if min_m[0] < 0.0 || min_m[1] < 0.0 || max_m[0] > hi[0] || max_m[1] > hi[1] {

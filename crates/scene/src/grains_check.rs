@@ -47,6 +47,7 @@ pub fn parse_grains(text: &str, path: &Path) -> Result<ValidGrainScene, SceneErr
         base_dir: &base_dir,
     };
     let mut warnings = validate(&scene, &ctx)?;
+    super::gates::validate(&scene.grains, scene.run.end_time_s, &ctx)?;
     warnings.extend(no_floor(&scene.grains));
     Ok(ValidGrainScene {
         scene,

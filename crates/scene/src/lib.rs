@@ -8,6 +8,8 @@ pub mod collapse_names;
 mod context;
 pub mod coupling;
 pub mod coupling_check;
+mod domain;
+mod gates;
 mod grains;
 mod grains_check;
 mod legacy;
@@ -208,7 +210,7 @@ pub fn parse_any(text: &str, path: &Path) -> Result<AnyScene, SceneError> {
 /// Parse and validate scene text; `path` is used in messages and to resolve relative files.
 pub fn parse(text: &str, path: &Path) -> Result<ValidScene, SceneError> {
     screen_raw(text, path)?;
-    let scene: Scene = locate::strict(text, path)?;
+    let mut scene: Scene = locate::strict(text, path)?;
     unknown::refuse_ignored(text, &scene, path)?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let ctx = context::Context {
@@ -216,7 +218,9 @@ pub fn parse(text: &str, path: &Path) -> Result<ValidScene, SceneError> {
         path,
         base_dir: &base_dir,
     };
-    let (units, warnings) = validate::validate(&scene, &ctx)?;
+    let mut warnings = domain::resolve(&mut scene, &ctx)?;
+    let (units, more) = validate::validate(&scene, &ctx)?;
+    warnings.extend(more);
     Ok(ValidScene {
         scene,
         units,

@@ -120,6 +120,22 @@ fn validate(s: &MpmScene, ctx: &Context) -> Result<(MpmSetup, f64, Vec<String>),
 /// `[domain]`: the cell size and counts; returns h (m), the counts and the size (m).
 fn validate_grid(s: &MpmScene, ctx: &Context) -> Result<(f64, [usize; 2], [f64; 2]), SceneError> {
     let d = &s.domain;
+    if d.size_m.is_some() {
+        return Err(ctx.err(
+            "size_m",
+            0,
+            "an MPM grid is given by cells = [nx, ny] and spacing_m (size_m is for a fluid \
+             scene whose relaxation_time and lattice_velocity fix the spacing, or a grains \
+             scene)",
+        ));
+    }
+    if d.cells == [0, 0] {
+        return Err(ctx.err(
+            "domain",
+            0,
+            "[domain] needs cells = [nx, ny] and spacing_m (the grid cell size h, m)",
+        ));
+    }
     positive(ctx, "spacing_m", d.spacing_m, "the cell size")?;
     let h = d.spacing_m;
     let cells = d.cells;

@@ -43,14 +43,23 @@ pub struct Scene {
     pub coupling: Option<super::coupling::CouplingSpec>,
 }
 
-/// Lattice size and spacing. The domain spans [0, cells_x·dx] × [0, cells_y·dx].
+/// Lattice size and spacing. The domain spans [0, cells_x·dx] × [0, cells_y·dx]. Either
+/// `cells` with `spacing_m`, or `size_m` when `[fluid]` fixes the relaxation time and the
+/// lattice velocity together (validation then fills `cells` and `spacing_m`).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Domain {
-    /// Cells along x and y.
+    /// Cells along x and y ([0, 0] in the file when `size_m` is given).
+    #[serde(default)]
     pub cells: [usize; 2],
-    /// Lattice spacing Δx in metres.
+    /// Lattice spacing Δx in metres (0 in the file when `size_m` is given).
+    #[serde(default)]
     pub spacing_m: f64,
+    /// Width and height of the domain (m), instead of `cells` and `spacing_m`: the spacing
+    /// follows from `[fluid] relaxation_time` and `lattice_velocity`
+    /// (Δx = ν u_lb / (U (τ − ½)/3)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size_m: Option<[f64; 2]>,
 }
 
 /// Fluid properties and model choices.

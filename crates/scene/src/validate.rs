@@ -85,13 +85,17 @@ fn validate_units(s: &Scene, ctx: &Context) -> Result<Units, SceneError> {
             f.relaxation_time.map(TimeStepChoice::RelaxationTime),
         ),
     ];
-    let given: Vec<_> = choices.iter().filter(|c| c.1.is_some()).collect();
+    let mut given: Vec<_> = choices.iter().filter(|c| c.1.is_some()).collect();
+    // With size_m, τ and u_lb together fixed the spacing (domain.rs): τ sets Δt.
+    if s.domain.size_m.is_some() && given.len() == 2 {
+        given.retain(|c| c.0 == "relaxation_time");
+    }
     if given.len() != 1 {
         return Err(ctx.err(
             "fluid",
             0,
             format!(
-                "set exactly one of time_step_s, lattice_velocity or relaxation_time in [fluid] (found {})",
+                "set exactly one of time_step_s, lattice_velocity or relaxation_time in [fluid] (found {}), or relaxation_time and lattice_velocity together with [domain] size_m = [width, height] instead of cells and spacing_m",
                 given.len()
             ),
         ));
