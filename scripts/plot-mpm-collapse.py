@@ -3,10 +3,11 @@
 and grainflow's own DEM sweep.
 
 Reads runs/mpm-collapse/<name>/summary.json (jobs/mpm-collapse/run.sh): the main sweep is
-a<a> (4 mm cells, GIMP, 2x2 points per cell); the study runs are a<a>-h2mm, -linear, -ppc4,
+a<a>-h4mm (4 mm cells, GIMP, 2x2 points per cell, Coulomb floor); the canonical scenes a<a>
+(2 mm cells, 4x4 points, FLIP + 5 % PIC, rough floor: the published resolution; a = 8 at
+4 mm); the study runs are a<a>-h2mm, -linear, -ppc4,
 -flip, -rough, -mui (mu(I) friction), -apic (APIC transfer), -apic-mui, and -apic-w<W> /
--apic-mui-w<W> (side walls of a quasi-2-D channel W cm apart), -apic-mui-w10-rough (and a rough floor),
--h2mm-ppc4-rough (the published resolution, FLIP + 5 % PIC, rough floor).
+-apic-mui-w<W> (side walls of a quasi-2-D channel W cm apart), -apic-mui-w10-rough (and a rough floor).
 Prints a table of (L_f - L_i)/L_i and H_f/L_i against the experiments' law (Lajeunesse et
 al. 2005) and the 2-D DEM law, the study's differences, and draws run-out vs a on log axes
 with the DEM sweep of issue 5 (its committed table, jobs/column-collapse/README.md).
@@ -98,9 +99,9 @@ def main():
         print(f"{name:>17} {a:5.2f} {s['points']:7d} {ro:7.3f} {e:6.3f} {100*(ro/e-1):+6.1f}% {d:7.3f} {100*(ro/d-1):+6.1f}% "
               f"{r['collapse.final_height']:7.3f} {r['collapse.stop_time']:7.2f} {s['point_steps_per_s']/1e6:6.2f}{thick}")
         if "-" not in name:
-            main_rows.append((a, ro))
-        elif name.endswith("-h2mm-ppc4-rough"):
             published_rows.append((a, ro))
+        elif name.endswith("-h4mm"):
+            main_rows.append((a, ro))
         elif name.endswith("-apic-mui-w10-rough") and "h2mm" not in name:
             walls_mui_rough_rows.append((a, ro))
         elif name.endswith("-rough") and "-w" not in name and "h2mm" not in name:
@@ -118,7 +119,7 @@ def main():
         elif name.endswith("-mui") and "h2mm" not in name:
             mui_rows.append((a, ro))
     for a in (2, 4):
-        base = runs.get(f"a{a}")
+        base = runs.get(f"a{a}-h4mm")
         if not base:
             continue
         b = base["results"]["collapse.runout"]

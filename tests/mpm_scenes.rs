@@ -343,7 +343,7 @@ fn short_column_collapse_with_the_pic_blend_stays_near_the_experiments() {
 /// floor runs out 1.948 here (jobs/mpm-collapse/README.md).
 #[test]
 fn published_configuration_matches_the_experiments_at_a_1() {
-    let r = collapse_near_the_experiments("jobs/mpm-collapse/a1-h2mm-ppc4-rough.toml", 1.0);
+    let r = collapse_near_the_experiments("jobs/mpm-collapse/a1.toml", 1.0);
     // No thin tail under the PIC blend: the 5 mm-thick front is within a cell of the front.
     let gap =
         r["collapse.front_m"].as_f64().unwrap() - r["collapse.thick_front_m"].as_f64().unwrap();

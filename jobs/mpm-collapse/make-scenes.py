@@ -1,7 +1,11 @@
 #!/usr/bin/env python3
-"""Write the MPM column-collapse scenes: a in {0.5, 1, 2, 4, 8} at the sweep resolution
-(L_i = 0.1 m, 4 mm cells = 25 across the column, 2x2 points per cell, GIMP, USF, FLIP
-blended with 5 % PIC), plus the study at a = 2 and 4: 2 mm cells, linear shape functions
+"""Write the MPM column-collapse scenes. The canonical ones (a0.5, a1, a2, a4, a8.toml) are
+the best-validated configuration: the published GIMP study's resolution (2 mm cells = 50
+across the column, 4x4 points per cell), GIMP, USF, FLIP blended with 5 % PIC, a rough
+(no-slip) floor; a = 8 at 4 mm cells with 2x2 points (its 2 mm run, 320 000 points, takes
+about four hours on 2 cores). Each declares the run-out it achieves. The study, written
+into the run folder: the earlier sweep (a{a}-h4mm: 4 mm cells, 2x2 points, Coulomb floor)
+and at a = 2 and 4: 2 mm cells, linear shape functions
 (at both resolutions), 4x4 points per cell, and pure FLIP; every a with a rough (no-slip)
 base instead of the Coulomb one; APIC, mu(I) friction, and the side walls of a quasi-2-D
 channel (5, 10 and 20 cm apart, the beads' wall friction), also with a rough floor.
@@ -33,7 +37,7 @@ THICK = 0.005
 
 
 def scene(a, h=0.004, ppc=2, shape="gimp", update="usf", li=0.1, title_extra="", avg=True, pic=0.05,
-          base=None, mu_i=False, walls=None, phi=PHI):
+          base=None, mu_i=False, walls=None, phi=PHI, check=None):
     hi = a * li
     # Run-out room: 2x the experiments' law plus margin; flows stop by ~6 tau_c.
     runout = (1.2 * a if a < 2.3 else 1.9 * a ** (2 / 3)) * li
@@ -101,7 +105,7 @@ kind = "column-collapse"
 wall_x_m = 0.0
 floor_y_m = 0.0
 front_min_height_m = {THICK}
-''' + (CHECK if a <= 2 else "")
+''' + checks(a, check)
 
 
 # mu(I) (Jop, Forterre & Pouliquen 2006): the static friction stays the repose angle's
@@ -120,15 +124,42 @@ max = 1.2
 '''
 
 
+def checks(a, bounds):
+    """The issue's bound for a <= 2 (or `bounds`, (min, max) of the ratio to the experiments,
+    where a canonical scene declares what grainflow achieves)."""
+    if bounds is not None:
+        lo, hi = bounds
+        return f'''
+# What grainflow achieves here (jobs/mpm-collapse/README.md), not the experiments' 20 %.
+[[checks]]
+quantity = "collapse.experiment_ratio"
+min = {lo}
+max = {hi}
+'''
+    return CHECK if a <= 2 else ""
+
+
+ROUGH = '{ kind = "fixed" }'
+# The canonical configuration, and the ratio to the experiments' law a = 4 and 8 achieve in
+# it (measured 1.215 and 1.112; the bounds allow the scatter of about 5 % between variants).
+CANON = dict(h=0.002, ppc=4, base=ROUGH)
+DECLARED = {4: (1.15, 1.28), 8: (1.05, 1.18)}
+
+
 def main():
     root = os.path.dirname(os.path.dirname(HERE))
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "runs", "mpm-collapse", "scenes")
     os.makedirs(out, exist_ok=True)
     files = {}
+    for a in [0.5, 1, 2, 4]:
+        files[f"a{a:g}.toml"] = scene(a, **CANON, check=DECLARED.get(a),
+                                      title_extra=" (2 mm cells, 4x4 points, rough floor)")
+    files["a8.toml"] = scene(8, base=ROUGH, check=DECLARED[8],
+                             title_extra=" (4 mm cells, 2x2 points, rough floor)")
     for a in [0.5, 1, 2, 4, 8]:
-        files[f"a{a:g}.toml"] = scene(a)
-    for a in [0.5, 1, 2, 4, 8]:
-        files[f"a{a:g}-rough.toml"] = scene(a, base='{ kind = "fixed" }', title_extra=" (rough, no-slip base)")
+        files[f"a{a:g}-h4mm.toml"] = scene(a, title_extra=" (4 mm cells, Coulomb floor)")
+    for a in [0.5, 1, 2, 4]:
+        files[f"a{a:g}-rough.toml"] = scene(a, base=ROUGH, title_extra=" (rough, no-slip base)")
     for a in [0.5, 1, 2]:
         files[f"a{a:g}-h2mm-rough.toml"] = scene(a, h=0.002, base='{ kind = "fixed" }',
                                                  title_extra=" (2 mm cells, rough base)")
@@ -180,12 +211,8 @@ def main():
         files[f"a{a:g}-h2mm-ppc4-apic-mui-w10-rough.toml"] = scene(
             a, h=0.002, ppc=4, pic=None, mu_i=True, walls=0.1, base='{ kind = "fixed" }',
             title_extra=" (2 mm cells, 4x4 points, APIC, mu(I), side walls 10 cm apart, rough base)")
-    # ... and with the update of the earlier sweep (FLIP + 5 % PIC) on a rough floor: the
-    # configuration closest to the published study that matched the experiments below a = 2.7.
-    for a in [0.5, 1, 2, 4]:
-        files[f"a{a:g}-h2mm-ppc4-rough.toml"] = scene(
-            a, h=0.002, ppc=4, base='{ kind = "fixed" }',
-            title_extra=" (2 mm cells, 4x4 points, FLIP + 5 % PIC, rough base)")
+    # The same resolution with the earlier sweep's update (FLIP + 5 % PIC) on a rough floor,
+    # the configuration closest to the published study, is the canonical a0.5 ... a4.toml.
     for a in [0.5, 1, 2]:
         files[f"a{a:g}-h2mm-apic.toml"] = scene(a, h=0.002, pic=None, title_extra=" (2 mm cells, APIC)")
     for name, text in files.items():

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The MPM column-collapse sweep (a = 0.5, 1, 2, 4, 8 at 4 mm cells, FLIP + 5 % PIC) and the
+# The canonical MPM column collapses (a = 0.5 ... 4 at 2 mm cells with 4x4 points, a = 8 at
+# 4 mm, FLIP + 5 % PIC, rough floor), the earlier sweep (4 mm, Coulomb floor) and the
 # studies: rough base, 2 mm cells, shape functions, points per cell, pure FLIP, APIC, mu(I)
 # friction, side walls, rough floor, the published resolution; then the table and the plot with the DEM sweep and the published laws.
 # Usage: [THREADS=n] jobs/mpm-collapse/run.sh [ranks] [scene names...]   (all scenes: about
@@ -15,7 +16,7 @@ mkdir -p "$out"
 python3 jobs/mpm-collapse/make-scenes.py "$out/scenes" >/dev/null
 names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
-  names=(a0.5 a1 a2 a4 a8 a0.5-rough a1-rough a2-rough a4-rough a8-rough
+  names=(a0.5 a1 a2 a4 a8 a0.5-h4mm a1-h4mm a2-h4mm a4-h4mm a8-h4mm a0.5-rough a1-rough a2-rough a4-rough
          a0.5-h2mm a1-h2mm a2-h2mm a0.5-h2mm-rough a1-h2mm-rough a2-h2mm-rough a2-linear a2-h2mm-linear a2-ppc4 a2-flip
          a4-h2mm a4-linear a4-h2mm-linear a4-ppc4 a4-flip
          a0.5-apic a1-apic a2-apic a4-apic a8-apic a0.5-h2mm-apic a1-h2mm-apic a2-h2mm-apic
@@ -30,8 +31,7 @@ if [ ${#names[@]} -eq 0 ]; then
          a0.5-apic-mui-w10-rough a1-apic-mui-w10-rough a2-apic-mui-w10-rough a4-apic-mui-w10-rough
          a8-apic-mui-w10-rough a0.5-h2mm-apic-mui-w10-rough a1-h2mm-apic-mui-w10-rough
          a2-h2mm-apic-mui-w10-rough a0.5-h2mm-ppc4-apic-mui-w10-rough a1-h2mm-ppc4-apic-mui-w10-rough
-         a2-h2mm-ppc4-apic-mui-w10-rough
-         a0.5-h2mm-ppc4-rough a1-h2mm-ppc4-rough a2-h2mm-ppc4-rough a4-h2mm-ppc4-rough)
+         a2-h2mm-ppc4-apic-mui-w10-rough)
 fi
 for name in "${names[@]}"; do
   scene=$out/scenes/$name.toml
