@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Draw the fluid's measured stability map (jobs/stability/lbm-map.csv, from
 `grainflow stability-map`): one panel per operator, tau - 1/2 (log) against the lattice Mach
-number, each point marked by which of the two test flows stayed stable, and the limit
-`grainflow check` uses (the smallest tau from which every larger one was stable in both flows).
+number, each point marked by which of the two test flows stayed stable, and the limits
+`grainflow check` uses for each flow (between the largest tau that failed and the smallest from
+which every larger one was stable: their geometric mean in tau - 1/2).
 
 Usage: scripts/plot-stability.py [MAP_CSV] [OUT_PNG]
 """
@@ -38,21 +39,29 @@ for ax, op in zip(axes.flat, ops):
         m, c, label = style[k]
         ax.scatter(tau - 0.5, mach, marker=m, c=c, s=28, label=None if k in seen else label)
         seen.add(k)
-    # The limit: per Mach, the smallest tau from which every larger tau was stable in both.
+    # check's limit per flow and Mach: the geometric mean, in tau - 1/2, of the largest tau
+    # that failed and the smallest from which every larger one was stable.
     machs = sorted({m for _, m in pts})
-    lim = []
-    for mach in machs:
-        taus = sorted(t for t, m in pts if m == mach)
-        limit = None
-        for t in reversed(taus):
-            f = pts[(t, mach)]
-            if not (f.get("shear-layer") and f.get("cavity")):
-                break
-            limit = t
-        if limit is not None:
-            lim.append((limit - 0.5, mach))
-    if lim:
-        ax.step([p[0] for p in lim], [p[1] for p in lim], where="mid", c="k", lw=1, label="check's limit")
+    for flow, colour in (("shear-layer", "tab:blue"), ("cavity", "tab:orange")):
+        lim = []
+        for mach in machs:
+            taus = sorted(t for t, m in pts if m == mach)
+            # From the largest stable tau down (failures above it cap the band instead).
+            stable = [t for t in taus if pts[(t, mach)].get(flow)]
+            taus = [t for t in taus if stable and t <= stable[-1]]
+            limit, failed = None, None
+            for t in reversed(taus):
+                if not pts[(t, mach)].get(flow):
+                    failed = t
+                    break
+                limit = t
+            if limit is None:
+                continue
+            x = limit - 0.5 if failed is None else ((failed - 0.5) * (limit - 0.5)) ** 0.5
+            lim.append((x, mach))
+        if lim:
+            ax.plot([p[0] for p in lim], [p[1] for p in lim], c=colour, lw=1.2,
+                    label=f"check's limit, {flow}")
     ax.set_xscale("log")
     ax.set_title(op)
     ax.grid(alpha=0.3)
@@ -61,7 +70,7 @@ for ax in axes[-1]:
 for ax in axes[:, 0]:
     ax.set_ylabel("lattice Mach number U / c_s")
 axes[0, 0].legend(fontsize=8, loc="upper left")
-fig.suptitle("Measured stability: double shear layer and lid-driven cavity, 64², 4000 steps (grainflow stability-map)")
+fig.suptitle("Measured stability: double shear layer and lid-driven cavity, 64², 10 000 steps; stable: finite and below 1.5 × the driving speed")
 fig.tight_layout()
 fig.savefig(out, dpi=110)
 print(f"wrote {out}")

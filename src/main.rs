@@ -232,7 +232,7 @@ fn stability_map_estimate() -> String {
         .unwrap_or(f64::NAN);
     let threads = rayon::current_num_threads();
     format!(
-        "stability maps: {runs} fluid runs of {0}² cells × {1} steps (at most about {2} on {threads}          thread(s) at the measured {3:.0} MLUPS per thread), then {4} DEM and {5} MPM runs",
+        "stability maps: {runs} fluid runs of {0}² cells × {1} steps (at most about {2} on {threads} thread(s) at the measured {3:.0} MLUPS per thread), then {4} DEM and {5} MPM runs",
         st::LBM_SIZE,
         st::LBM_STEPS,
         human(cells / (one * threads as f64)),

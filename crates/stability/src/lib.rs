@@ -19,15 +19,19 @@ pub const MPM_CSV: &str = include_str!("../../../jobs/stability/mpm-courant.csv"
 use std::path::Path;
 
 /// Relaxation times of the fluid map.
-pub const TAUS: [f64; 15] = [
-    0.5001, 0.5003, 0.501, 0.502, 0.505, 0.51, 0.52, 0.53, 0.55, 0.6, 0.7, 0.8, 1.0, 1.5, 2.0,
+pub const TAUS: [f64; 27] = [
+    0.5001, 0.50015, 0.5002, 0.5003, 0.5005, 0.5007, 0.501, 0.5015, 0.502, 0.503, 0.505, 0.507,
+    0.51, 0.515, 0.52, 0.525, 0.53, 0.54, 0.55, 0.57, 0.6, 0.65, 0.7, 0.8, 1.0, 1.5, 2.0,
 ];
 /// Lattice Mach numbers of the fluid map.
-pub const MACHS: [f64; 9] = [0.02, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4];
+pub const MACHS: [f64; 16] = [
+    0.02, 0.05, 0.075, 0.1, 0.125, 0.15, 0.175, 0.2, 0.225, 0.25, 0.275, 0.3, 0.325, 0.35, 0.375,
+    0.4,
+];
 /// Lattice size and steps of the fluid map's runs.
 pub const LBM_SIZE: usize = 64;
 /// See [`LBM_SIZE`].
-pub const LBM_STEPS: usize = 4000;
+pub const LBM_STEPS: usize = 10_000;
 /// Time-step factors of the DEM sweep, and its steps.
 pub const LAMBDAS: [f64; 15] = [
     0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.3, 1.5, 2.0,
