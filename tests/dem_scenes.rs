@@ -151,10 +151,11 @@ fn bad_grains_scenes_name_the_field() {
         &format!("{GOOD}[grains.time_step]\nkind = \"fixed\"\ntime_step_s = 1.0\n"),
         &["time step", "exceeds"],
     );
-    // With [fluid] it is a coupled scene, which needs the fluid's tables and [coupling].
+    // With [fluid] it is a coupled scene, which needs the fluid's tables and [coupling]
+    // (its [domain] may keep size_m: a fluid domain takes it too).
     refused(
         &format!("{GOOD}[fluid]\n"),
-        &["size_m", "runs coupled", "[coupling]"],
+        &["`fluid.density_kg_m3`", "runs coupled", "[coupling]"],
     );
     refused(
         &format!("{GOOD}[[analyses]]\nkind = \"column-collapse\"\nwall_x_m = 0.0\nfloor_y_m = 0.0\nfront_min_height_m = 0.005\n"),
