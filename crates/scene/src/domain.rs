@@ -56,18 +56,7 @@ pub(crate) fn resolve(s: &mut Scene, ctx: &Context) -> Result<Vec<String>, Scene
         ));
     };
     positive(ctx, "lattice_velocity", u_lb, "lattice_velocity")?;
-    positive(
-        ctx,
-        "viscosity_m2_s",
-        f.viscosity_m2_s,
-        "the kinematic viscosity",
-    )?;
-    positive(
-        ctx,
-        "reference_velocity_m_s",
-        f.reference_velocity_m_s,
-        "the reference velocity",
-    )?;
+    super::validate::fluid_figures(f, ctx)?;
     if !(tau > 0.5 && tau.is_finite()) {
         return Err(ctx.err(
             "relaxation_time",

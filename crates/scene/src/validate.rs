@@ -51,10 +51,8 @@ fn validate_lattice(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// `[fluid]`'s physical figures and its one time-step choice; returns the derived lattice
-/// units (τ > ½, Ma < 0.3 unless allowed).
-fn validate_units(s: &Scene, ctx: &Context) -> Result<Units, SceneError> {
-    let f = &s.fluid;
+/// `[fluid]`'s density, viscosity, reference velocity and length: each a positive number.
+pub(crate) fn fluid_figures(f: &Fluid, ctx: &Context) -> Result<(), SceneError> {
     positive(ctx, "density_kg_m3", f.density_kg_m3, "the density")?;
     positive(
         ctx,
@@ -73,7 +71,14 @@ fn validate_units(s: &Scene, ctx: &Context) -> Result<Units, SceneError> {
         "reference_length_m",
         f.reference_length_m,
         "the reference length",
-    )?;
+    )
+}
+
+/// `[fluid]`'s physical figures and its one time-step choice; returns the derived lattice
+/// units (τ > ½, Ma < 0.3 unless allowed).
+fn validate_units(s: &Scene, ctx: &Context) -> Result<Units, SceneError> {
+    let f = &s.fluid;
+    fluid_figures(f, ctx)?;
     let choices = [
         ("time_step_s", f.time_step_s.map(TimeStepChoice::TimeStep)),
         (
