@@ -129,7 +129,19 @@ fn assess_into(
     // The obstacles as `run` draws them (a mask image is read and checked here too).
     if let scene::AnyScene::Fluid(s) = any {
         crate::run::check_quantities(s)?;
-        scene::build_lattice(s)?;
+        let built = scene::build_lattice(s)?;
+        let grains = s.scene.grains.is_some();
+        for (o, cells) in s.scene.obstacles.iter().zip(&built.obstacle_cells) {
+            let wall = match o.circle_wall(grains) {
+                Some(scene::CircleWall::Interpolated) => "curved wall (interpolated bounce-back)",
+                _ => "staircase (half-way bounce-back on the cells inside)",
+            };
+            say!(
+                out,
+                "  obstacle `{}`: {wall}, {cells} cells inside",
+                o.name()
+            );
+        }
     }
     Ok(0)
 }

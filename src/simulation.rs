@@ -6,6 +6,7 @@ use analysis::flows::{taylor_green_pressure, taylor_green_velocity};
 use coupling::{CouplingError, LbmDem};
 use decomposition::{Comm, Side, SlabHalo, SlabPartition};
 use io::probes::Series;
+use lbm::curved::CurvedWalls;
 use lbm::fields::{Fields, Totals};
 use lbm::gpu::{GpuContext, GpuFluid};
 use lbm::lattice::StepError;
@@ -18,6 +19,35 @@ use std::time::Instant;
 
 mod probes;
 use probes::{check_grain_probes, probe_targets, ProbeTarget};
+
+/// A curved-wall cell that went bad on any rank (`bad` on this one: its plan index and
+/// density), as the fluid's error naming it, the same on every rank; the step is `step`
+/// (counted from 1). Collective (one agreement per call on more than one rank).
+fn curved_failure(
+    w: &CurvedWalls,
+    comm: &dyn Comm,
+    step: u64,
+    bad: Option<(usize, f64)>,
+) -> Result<(), StepError> {
+    let any = match comm.size() {
+        1 => bad.is_some(),
+        _ => comm.any(bad.is_some()),
+    };
+    if !any {
+        return Ok(());
+    }
+    let mine = bad.map_or(Vec::new(), |(n, rho)| {
+        let (x, y) = w.cell_of(n);
+        vec![x as f64, y as f64, rho]
+    });
+    let all = comm.all_gather_f64(&mine);
+    Err(StepError {
+        step,
+        x: all[0] as usize,
+        y: all[1] as usize,
+        density: all[2],
+    })
+}
 
 /// Whether the CPU lattice runs in place: asked for, or `auto` (it measured faster in f32
 /// and f64 alike, with grains or without; the same bits either way).
@@ -102,6 +132,9 @@ pub struct Simulation<T: Real> {
     probe_on_rank_face: bool,
     /// Grains coupled to the fluid, when the scene has them.
     pub grains: Option<LbmDem>,
+    /// Circular obstacles with curved walls (interpolated bounce-back), when the scene has
+    /// them (scenes without grains only).
+    curved: Option<CurvedWalls>,
 }
 
 /// Columns split over the ranks of `comm` by fluid-cell count.
@@ -257,7 +290,10 @@ impl<T: Real> Simulation<T> {
                 _ => false,
             });
         let ramp_s = inlet_ramp_s(scene);
+        let curved = (!built.curved.is_empty() && grains.is_none())
+            .then(|| CurvedWalls::new(fluid.lattice(), &built.curved));
         let mut sim = Self {
+            curved,
             probe_on_rank_face,
             fluid,
             units,
@@ -303,14 +339,19 @@ impl<T: Real> Simulation<T> {
         }
         let wait0 = lat.lattice().halo_wait_seconds();
         let t = Instant::now();
-        let r = match &mut self.grains {
-            Some(c) => lat.stream_collide_moving(comm, &mut c.moving()),
-            None => lat.stream_collide(comm).map(|_| None),
+        let r = match (&mut self.grains, &mut self.curved) {
+            (Some(c), _) => lat.stream_collide_moving(comm, &mut c.moving()),
+            (None, Some(w)) => lat.stream_collide_moving(comm, &mut w.moving()),
+            (None, None) => lat.stream_collide(comm).map(|_| None),
         };
         let waited = lat.lattice().halo_wait_seconds() - wait0;
         self.times.seconds[stage::COLLIDE_STREAM] += t.elapsed().as_secs_f64() - waited;
         self.times.seconds[stage::HALO_WAIT] += waited;
         let bad = r?;
+        if let Some(w) = &self.curved {
+            let step = lat.lattice().steps_done();
+            curved_failure(w, comm, step, bad)?;
+        }
         if let Some(c) = &mut self.grains {
             let fluid = lat.as_mut();
             let step = fluid.lattice().steps_done();
@@ -344,6 +385,15 @@ impl<T: Real> Simulation<T> {
         for (x, y, rho, u) in self.link_cell_moments(None) {
             let k = y * f.nx + x;
             (f.rho[k], f.ux[k], f.uy[k]) = (rho, u[0], u[1]);
+        }
+        if let Some(w) = &self.curved {
+            // Inside a curved wall: solid, as [`Fields`] shows solids.
+            let stride = self.fluid.lattice().stride();
+            for &k in w.interior() {
+                let (x, y) = (k as usize % stride - 1, k as usize / stride - 1);
+                let at = y * f.nx + x;
+                (f.rho[at], f.ux[at], f.uy[at], f.fluid[at]) = (1.0, 0.0, 0.0, false);
+            }
         }
         f
     }

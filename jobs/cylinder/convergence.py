@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
 """Schaefer & Turek (1996) case 2D-1 at D = 10, 20, 40 and 80 cells: the staircase
-cylinder (an `[[obstacles]]` circle, half-way bounce-back on the cells whose centres lie
-inside it) against the curved one (the cylinder as a grain held in place, `fixed = true`,
-with interpolated bounce-back or partially saturated cells, which see the exact circle).
+cylinder (an `[[obstacles]]` circle with wall = "staircase": half-way bounce-back on the
+cells whose centres lie inside it) against the curved one (the same circle with its
+default wall = "interpolated": Bouzidi et al. 2001 at the exact link fraction) and the
+cylinder as a grain held in place (`fixed = true`) with partially saturated cells ("psm")
+or interpolated bounce-back ("held-interpolated", the same numerics as the obstacle's).
 
 Each case is `jobs/cylinder/scene.toml` with its lattice refined (acoustic scaling: the
-lattice velocity stays 0.05, so tau = 0.5 + 0.05 * (2/3) * D / 20 * 3 grows from 0.55 to
-0.9 and the Mach number stays 0.087), written into the output folder (never into jobs/).
+lattice velocity stays at --lattice-velocity, 0.05 unless given, so tau grows with D and
+the Mach number stays fixed), written into the output folder (never into jobs/).
 It records c_D, c_L and Delta P (probes on the cylinder's surface), their deviations from
 the benchmark's high-accuracy values, and the observed order of convergence between
 successive resolutions, p = log2(|e(D)| / |e(2D)|).
@@ -14,6 +16,7 @@ successive resolutions, p = log2(|e(D)| / |e(2D)|).
 Usage:
   jobs/cylinder/convergence.py --out runs/cylinder [--bin target/release/grainflow]
         [--threads 2] [--cells 10,20,40,80] [--walls staircase,interpolated,psm]
+        [--lattice-velocity 0.05]
 Writes OUT/results.csv and OUT/results.md (the table docs/validation.md quotes).
 """
 
@@ -34,6 +37,7 @@ name = "cylinder"
 shape = "circle"
 centre_m = [0.2, 0.2]
 radius_m = 0.05
+wall = "interpolated"
 """
 GRAIN = """[grains]
 density_kg_m3 = 2500.0
@@ -54,16 +58,20 @@ scheme = "SCHEME"
 """
 
 
-def scene_text(wall, cells):
+def scene_text(wall, cells, lattice_velocity):
     with open(os.path.join(HERE, "scene.toml")) as f:
         text = f.read()
     replace = [
         ("cells = [440, 82]", f"cells = [{22 * cells}, {round(4.1 * cells)}]"),
         ("spacing_m = 0.005", f"spacing_m = {0.1 / cells!r}"),
+        ("lattice_velocity = 0.05", f"lattice_velocity = {lattice_velocity!r}"),
     ]
-    if wall != "staircase":
+    if wall == "staircase":
+        replace.append((OBSTACLE, OBSTACLE.replace('"interpolated"', '"staircase"')))
+    elif wall in ("psm", "held-interpolated"):
+        scheme = "psm" if wall == "psm" else "interpolated"
         replace += [
-            (OBSTACLE, GRAIN.replace("SCHEME", wall)),
+            (OBSTACLE, GRAIN.replace("SCHEME", scheme)),
             ('kind = "force"\nname = "drag"\nobstacle = "cylinder"',
              'kind = "grain"\nname = "drag"\nid = 0'),
         ]
@@ -71,7 +79,7 @@ def scene_text(wall, cells):
         if a not in text:
             sys.exit(f"error: scene.toml no longer contains {a!r}")
         text = text.replace(a, b)
-    # The scene's checks state the D = 20 staircase's accuracy; here every case is judged
+    # The scene's checks state the D = 20 curved wall's accuracy; here every case is judged
     # by the table instead.
     return text.split("[[checks]]")[0]
 
@@ -81,7 +89,7 @@ def run_case(args, wall, cells):
     os.makedirs(folder, exist_ok=True)
     path = os.path.join(folder, "scene.toml")
     with open(path, "w") as f:
-        f.write(scene_text(wall, cells))
+        f.write(scene_text(wall, cells, args.lattice_velocity))
     start = time.time()
     out = os.path.join(folder, "out")
     run = subprocess.run([args.bin, "run", path, "--out", out, "--quiet",
@@ -131,6 +139,7 @@ def main():
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--cells", default="10,20,40,80")
     p.add_argument("--walls", default="staircase,interpolated,psm")
+    p.add_argument("--lattice-velocity", type=float, default=0.05)
     args = p.parse_args()
     if not os.access(args.bin, os.X_OK):
         sys.exit(f"error: no grainflow binary at {args.bin} (build it, or give --bin)")

@@ -7,6 +7,7 @@ use crate::error::RunError;
 use coupling::LbmDem;
 use decomposition::Comm;
 use io::probes::Series;
+use lbm::curved::CurvedWalls;
 use lbm::Real;
 use scene::{solid_id_of, BuiltGeometry, Probe, ValidScene};
 use std::collections::{HashMap, HashSet};
@@ -59,6 +60,87 @@ fn bilinear_corners(
     Some(corners)
 }
 
+/// Where a surface probe samples the fluid along a curved wall's outward normal: at d₀,
+/// d₀ + 1 and d₀ + 2 cells, for the first d₀ here whose three bilinear stencils lie wholly
+/// in the fluid (from 1.5 cells on, a stencil never reaches into the circle: a corner is at
+/// most √2 cells from its point).
+const SURFACE_OFFSETS: [f64; 5] = [0.5, 0.75, 1.0, 1.25, 1.5];
+
+/// For a point `p` (m) within half a cell of the surface of a curved-wall circle: the
+/// cells and weights that give the value on the surface at the point's projection,
+/// extrapolated quadratically from three bilinear samples along the outward normal
+/// (the Lagrange polynomial through d₀, d₀ + 1, d₀ + 2, evaluated at 0; see
+/// [`SURFACE_OFFSETS`]). `None` when the point is not on such a surface, or no offset
+/// keeps the samples in the fluid (the caller then reads the fluid beside the wall).
+fn on_curved_surface(
+    p: [f64; 2],
+    dx: f64,
+    built: &BuiltGeometry,
+) -> Option<Vec<(usize, usize, f64)>> {
+    let at = [p[0] / dx, p[1] / dx];
+    let c = built.curved.iter().find(|c| {
+        let d = (at[0] - c.centre[0]).hypot(at[1] - c.centre[1]);
+        (d - c.radius).abs() <= 0.5
+    })?;
+    let d = (at[0] - c.centre[0]).hypot(at[1] - c.centre[1]);
+    if d == 0.0 {
+        return None;
+    }
+    let normal = [(at[0] - c.centre[0]) / d, (at[1] - c.centre[1]) / d];
+    let (n, fluid) = ([built.setup.nx, built.setup.ny], |x: usize, y: usize| {
+        built.is_fluid(x, y)
+    });
+    let samples = |d0: f64| -> Option<Vec<(usize, usize, f64)>> {
+        let weights = [
+            (d0 + 1.0) * (d0 + 2.0) / 2.0,
+            -d0 * (d0 + 2.0),
+            d0 * (d0 + 1.0) / 2.0,
+        ];
+        let mut out = Vec::with_capacity(12);
+        for (k, weight) in weights.into_iter().enumerate() {
+            let s = c.radius + d0 + k as f64;
+            let q = [
+                (c.centre[0] + s * normal[0]) * dx,
+                (c.centre[1] + s * normal[1]) * dx,
+            ];
+            if !stencil_in_fluid(q, dx, n, fluid) {
+                return None;
+            }
+            let corners = bilinear_corners(q, dx, n, fluid)?;
+            out.extend(corners.into_iter().map(|(x, y, w)| (x, y, w * weight)));
+        }
+        Some(out)
+    };
+    SURFACE_OFFSETS.into_iter().find_map(samples)
+}
+
+/// Whether every corner of the bilinear stencil of `q` (m) that carries a weight above
+/// 10⁻⁹ lies in the lattice (`n` cells) and in the fluid: a point on a row of cell centres
+/// needs only that row, even where rounding gives the next row a weight of 10⁻¹⁶.
+fn stencil_in_fluid(
+    q: [f64; 2],
+    dx: f64,
+    n: [usize; 2],
+    fluid: impl Fn(usize, usize) -> bool,
+) -> bool {
+    let g = [q[0] / dx - 0.5, q[1] / dx - 0.5];
+    let base = g.map(f64::floor);
+    let frac = [g[0] - base[0], g[1] - base[1]];
+    let tiny = 1e-9;
+    (0..4).all(|c| {
+        let (ix, iy) = (c & 1, c >> 1);
+        let wx = if ix == 0 { 1.0 - frac[0] } else { frac[0] };
+        let wy = if iy == 0 { 1.0 - frac[1] } else { frac[1] };
+        let (x, y) = (base[0] as i64 + ix as i64, base[1] as i64 + iy as i64);
+        wx * wy <= tiny
+            || (x >= 0
+                && y >= 0
+                && (x as usize) < n[0]
+                && (y as usize) < n[1]
+                && fluid(x as usize, y as usize))
+    })
+}
+
 /// The probes' targets on the global lattice and their (empty) series, in scene order.
 #[allow(clippy::type_complexity)]
 pub(super) fn probe_targets(
@@ -72,19 +154,20 @@ pub(super) fn probe_targets(
         match p {
             Probe::Point { name, position_m } => {
                 let setup = &built.setup;
-                let fluid = |x: usize, y: usize| setup.cells[y * setup.nx + x] == 0;
-                let corners =
-                    bilinear_corners(*position_m, units.dx_m, [setup.nx, setup.ny], fluid)
-                        .ok_or_else(|| {
-                            scene.invalid(
-                                "position_m",
-                                format!(
-                                    "probe `{name}` lies inside an obstacle (no fluid cell \
+                let fluid = |x: usize, y: usize| built.is_fluid(x, y);
+                let n = [setup.nx, setup.ny];
+                let corners = on_curved_surface(*position_m, units.dx_m, built)
+                    .or_else(|| bilinear_corners(*position_m, units.dx_m, n, fluid))
+                    .ok_or_else(|| {
+                        scene.invalid(
+                            "position_m",
+                            format!(
+                                "probe `{name}` lies inside an obstacle (no fluid cell \
                                      centre around it); move it into the fluid or onto the \
                                      obstacle's surface"
-                                ),
-                            )
-                        })?;
+                            ),
+                        )
+                    })?;
                 targets.push(ProbeTarget::Point(corners));
                 series.push(Series::new(name, vec!["ux_m_s", "uy_m_s", "pressure_pa"]));
             }
@@ -167,7 +250,7 @@ impl<T: Real> Simulation<T> {
             .iter()
             .any(|p| matches!(p, ProbeTarget::Solid(_)))
         {
-            self.fluid.forces(comm)
+            self.solid_forces(comm)
         } else {
             Vec::new()
         };
@@ -215,6 +298,24 @@ impl<T: Real> Simulation<T> {
             }
         }
         self.times.seconds[stage::PROBES] += t0.elapsed().as_secs_f64();
+    }
+
+    /// Momentum-exchange force (lattice units) on every solid in the last step, indexed by
+    /// solid id − 1: the lattice's staircased solids and the curved walls; the same bits on
+    /// any number of ranks. Collective.
+    fn solid_forces(&mut self, comm: &dyn Comm) -> Vec<[f64; 2]> {
+        let mut forces = self.fluid.forces(comm);
+        if let Some(w) = &self.curved {
+            let all = comm.all_gather_f64(&w.column_forces());
+            let widths: Vec<usize> = (0..comm.size())
+                .map(|r| self.partition.slab(r).width())
+                .collect();
+            let totals = CurvedWalls::reduce(&all, &widths, w.circles().len());
+            for (c, f) in w.circles().iter().zip(totals) {
+                forces[c.solid as usize - 1] = f;
+            }
+        }
+        forces
     }
 
     /// Velocity (m/s) and pressure (Pa) at every point probe (by target index; zero for
@@ -293,9 +394,10 @@ impl<T: Real> Simulation<T> {
         point
     }
 
-    /// Density and velocity (lattice units) of the fluid cells next to bounce-back grains,
-    /// by local cell (x, y), from their own values: a plain read of such a cell pulls the
-    /// rest fill under the grain instead of the bounce-back populations the sweep gives it.
+    /// Density and velocity (lattice units) of the fluid cells next to bounce-back grains
+    /// or curved walls, by local cell (x, y), from their own values: a plain read of such a
+    /// cell pulls the values under the grain or wall instead of the bounce-back populations
+    /// the sweep gives it.
     /// The collision keeps ρ and adds F to the momentum (Guo forcing), so from the
     /// post-collision values ρ = 1 + Σ h_i and u = (Σ h_i c_i − F/2) / ρ (Guo, Zheng & Shi
     /// 2002, eq. 10). Only the cells `wanted` keeps (all when `None`); empty for a fluid run
@@ -304,14 +406,14 @@ impl<T: Real> Simulation<T> {
         &mut self,
         wanted: Option<&HashSet<(usize, usize)>>,
     ) -> Vec<(usize, usize, f64, [f64; 2])> {
-        let Some(c) = &self.grains else {
-            return Vec::new();
+        let links = match (&self.grains, &self.curved) {
+            (Some(c), _) => c.coupler().link_cells(),
+            (None, Some(w)) => w.link_cells(),
+            (None, None) => return Vec::new(),
         };
         let stride = self.fluid.lattice().stride();
         let local = |k: u32| (k as usize % stride - 1, k as usize / stride - 1);
-        let cells: Vec<u32> = c
-            .coupler()
-            .link_cells()
+        let cells: Vec<u32> = links
             .iter()
             .copied()
             .filter(|&k| wanted.is_none_or(|w| w.contains(&local(k))))

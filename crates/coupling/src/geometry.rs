@@ -11,28 +11,7 @@ pub fn covers(centre: [f64; 2], radius: f64, x: i64, y: i64) -> bool {
     dx * dx + dy * dy <= radius * radius
 }
 
-/// Fraction δ ∈ (0, 1] of the link from the point `from` (a fluid cell centre, outside the
-/// disk) along `c` (a lattice velocity) at which the link meets the disk's surface
-/// (seed eq. 5.50). Returns 1 when the link does not reach the disk (a covered cell whose
-/// centre is on the boundary), so the caller falls back to half-way bounce-back there.
-pub fn link_fraction(from: [f64; 2], c: [f64; 2], centre: [f64; 2], radius: f64) -> f64 {
-    // |from + t c − centre|² = r²: a t² + 2 b t + k = 0 with k > 0 (from is outside).
-    let d = [from[0] - centre[0], from[1] - centre[1]];
-    let a = c[0] * c[0] + c[1] * c[1];
-    let b = d[0] * c[0] + d[1] * c[1];
-    let k = d[0] * d[0] + d[1] * d[1] - radius * radius;
-    let disc = b * b - a * k;
-    if disc < 0.0 || k <= 0.0 {
-        return 1.0;
-    }
-    // The nearer root; written to avoid cancellation when b < 0 (the link points inwards).
-    let t = k / (-b + disc.sqrt());
-    if t > 0.0 && t <= 1.0 {
-        t
-    } else {
-        1.0
-    }
-}
+pub use lbm::geometry::link_fraction;
 
 /// Antiderivative of √(r² − s²): ½ (s √(r² − s²) + r² asin(s / r)), for |s| ≤ r.
 fn half_chord_integral(s: f64, r: f64) -> f64 {

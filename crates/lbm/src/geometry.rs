@@ -82,6 +82,16 @@ impl Shape {
 
     /// Mark every cell whose centre lies inside with `id`. Returns how many cells it took.
     pub fn rasterise(&self, cells: &mut [u16], nx: usize, ny: usize, id: u16) -> usize {
+        self.visit(nx, ny, |k| cells[k] = id)
+    }
+
+    /// How many cells of an nx × ny lattice have their centre inside.
+    pub fn covered_cells(&self, nx: usize, ny: usize) -> usize {
+        self.visit(nx, ny, |_| {})
+    }
+
+    /// Call `f(y * nx + x)` for every cell whose centre lies inside; returns their number.
+    fn visit(&self, nx: usize, ny: usize, mut f: impl FnMut(usize)) -> usize {
         let (lo, hi) = self.bounds(nx, ny);
         let x0 = lo[0].floor().max(0.0) as usize;
         let y0 = lo[1].floor().max(0.0) as usize;
@@ -91,12 +101,35 @@ impl Shape {
         for y in y0..y1 {
             for x in x0..x1 {
                 if self.contains([x as f64 + 0.5, y as f64 + 0.5], nx) {
-                    cells[y * nx + x] = id;
+                    f(y * nx + x);
                     count += 1;
                 }
             }
         }
         count
+    }
+}
+
+/// Fraction δ ∈ (0, 1] of the link from the point `from` (a fluid cell centre, outside the
+/// disk) along `c` (a lattice velocity) at which the link meets the disk's surface
+/// (seed eq. 5.50). Returns 1 when the link does not reach the disk (a covered cell whose
+/// centre is on the boundary), so the caller falls back to half-way bounce-back there.
+pub fn link_fraction(from: [f64; 2], c: [f64; 2], centre: [f64; 2], radius: f64) -> f64 {
+    // |from + t c − centre|² = r²: a t² + 2 b t + k = 0 with k > 0 (from is outside).
+    let d = [from[0] - centre[0], from[1] - centre[1]];
+    let a = c[0] * c[0] + c[1] * c[1];
+    let b = d[0] * c[0] + d[1] * c[1];
+    let k = d[0] * d[0] + d[1] * d[1] - radius * radius;
+    let disc = b * b - a * k;
+    if disc < 0.0 || k <= 0.0 {
+        return 1.0;
+    }
+    // The nearer root; written to avoid cancellation when b < 0 (the link points inwards).
+    let t = k / (-b + disc.sqrt());
+    if t > 0.0 && t <= 1.0 {
+        t
+    } else {
+        1.0
     }
 }
 

@@ -13,6 +13,7 @@ pub mod boundary;
 mod bulk_aa;
 mod cells;
 pub mod collision;
+pub mod curved;
 pub mod d2q9;
 mod external;
 pub mod fields;

@@ -3,6 +3,7 @@
 
 use super::schema::*;
 use super::{SceneError, ValidScene};
+use lbm::curved::CurvedCircle;
 use lbm::geometry::Shape;
 use lbm::lattice::{FaceCondition, LatticeSetup, SolidInfo, MAX_SOLID};
 use lbm::Collision;
@@ -14,6 +15,18 @@ pub struct BuiltGeometry {
     pub setup: LatticeSetup,
     /// Cells taken by each obstacle, in scene order.
     pub obstacle_cells: Vec<usize>,
+    /// Circles with curved walls (interpolated bounce-back): their cells stay fluid in
+    /// `setup.cells`, and the fluid driver runs their links as a static plan.
+    pub curved: Vec<CurvedCircle>,
+}
+
+impl BuiltGeometry {
+    /// Whether global cell (x, y) is fluid: neither solid in the setup nor inside a
+    /// curved circle.
+    pub fn is_fluid(&self, x: usize, y: usize) -> bool {
+        self.setup.cells[y * self.setup.nx + x] == 0
+            && !self.curved.iter().any(|c| c.covers(x as i64, y as i64))
+    }
 }
 
 /// Solid id of obstacle `name` (walls take the first ids, one per wall face).
@@ -90,6 +103,7 @@ pub fn build_lattice(v: &ValidScene) -> Result<BuiltGeometry, SceneError> {
     let faces: [FaceCondition; 4] = faces.try_into().expect("four faces");
     let mut cells = vec![0u16; nx * ny];
     let mut obstacle_cells = Vec::new();
+    let mut curved = Vec::new();
     for o in &s.obstacles {
         let l = |p: [f64; 2]| [u.length_to_lattice(p[0]), u.length_to_lattice(p[1])];
         let shape = match o {
@@ -120,7 +134,19 @@ pub fn build_lattice(v: &ValidScene) -> Result<BuiltGeometry, SceneError> {
                 format!("at most {MAX_SOLID} solids are supported"),
             ));
         }
-        let taken = shape.rasterise(&mut cells, nx, ny, solids.len() as u16);
+        let id = solids.len() as u16;
+        let taken = match (&shape, o.circle_wall(s.grains.is_some())) {
+            (Shape::Circle { centre, radius }, Some(CircleWall::Interpolated)) => {
+                let c = CurvedCircle {
+                    solid: id,
+                    centre: *centre,
+                    radius: *radius,
+                };
+                curved.push(c);
+                shape.covered_cells(nx, ny)
+            }
+            _ => shape.rasterise(&mut cells, nx, ny, id),
+        };
         if taken == 0 {
             return Err(invalid(
                 "obstacles",
@@ -148,6 +174,7 @@ pub fn build_lattice(v: &ValidScene) -> Result<BuiltGeometry, SceneError> {
     Ok(BuiltGeometry {
         setup,
         obstacle_cells,
+        curved,
     })
 }
 

@@ -241,6 +241,12 @@ pub enum Obstacle {
         centre_m: [f64; 2],
         /// Radius (m).
         radius_m: f64,
+        /// How the fluid meets the wall: `"interpolated"` (the exact circle, Bouzidi et al.
+        /// 2001; the default in a scene without grains) or `"staircase"` (half-way bounce-back
+        /// on the cells whose centres lie inside; the default, and the only choice, in a
+        /// scene with grains).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        wall: Option<CircleWall>,
     },
     /// Polygon, vertices in order (m).
     Polygon {
@@ -258,7 +264,31 @@ pub enum Obstacle {
     },
 }
 
+/// The wall model of a circular obstacle.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum CircleWall {
+    /// Linear interpolated bounce-back at the exact link fraction (Bouzidi, Firdaouss &
+    /// Lallemand 2001).
+    Interpolated,
+    /// Half-way bounce-back on the cells whose centres lie inside (Ladd 1994).
+    Staircase,
+}
+
 impl Obstacle {
+    /// The wall model this obstacle gets in a scene with (`grains = true`) or without
+    /// grains: `None` for shapes other than circles, which are always staircased.
+    pub fn circle_wall(&self, grains: bool) -> Option<CircleWall> {
+        match self {
+            Obstacle::Circle { wall, .. } => Some(wall.unwrap_or(if grains {
+                CircleWall::Staircase
+            } else {
+                CircleWall::Interpolated
+            })),
+            _ => None,
+        }
+    }
+
     /// The obstacle's name.
     pub fn name(&self) -> &str {
         match self {

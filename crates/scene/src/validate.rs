@@ -315,9 +315,23 @@ fn validate_obstacles(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
                 vec![*min_m, *max_m]
             }
             Obstacle::Circle {
-                centre_m, radius_m, ..
+                centre_m,
+                radius_m,
+                wall,
+                ..
             } => {
                 positive(ctx, "radius_m", *radius_m, "the radius")?;
+                if s.grains.is_some() && *wall == Some(CircleWall::Interpolated) {
+                    return Err(ctx.err(
+                        "wall",
+                        nth_key(s, n, "wall"),
+                        "wall = \"interpolated\" is for scenes without grains (the coupling \
+                         owns the curved links of a coupled run): leave `wall` out for a \
+                         staircased obstacle, or make the cylinder a grain held in place \
+                         ([[grains.sample]] with fixed = true, [coupling] scheme = \
+                         \"interpolated\")",
+                    ));
+                }
                 let r = *radius_m;
                 vec![
                     [centre_m[0] - r, centre_m[1] - r],
@@ -372,6 +386,7 @@ fn nth_key(s: &Scene, n: usize, key: &str) -> usize {
             "max_m" => matches!(o, Obstacle::Rectangle { .. }),
             "vertices_m" => matches!(o, Obstacle::Polygon { .. }),
             "image" => matches!(o, Obstacle::Mask { .. }),
+            "wall" => matches!(o, Obstacle::Circle { wall: Some(_), .. }),
             _ => false,
         })
         .count()
