@@ -510,6 +510,14 @@ fn analyse<T: Real + hdf5::H5Type>(
         let mut r = Results::new();
         r.insert("run.mass".into(), totals_final.mass);
         r.insert(
+            "run.mass_drift_per_1e4_steps".into(),
+            analysis::mass_drift_per_1e4_steps(
+                st.totals_initial.mass,
+                totals_final.mass,
+                sim.fluid.lattice().steps_done(),
+            ),
+        );
+        r.insert(
             "run.max_speed_m_s".into(),
             scene.units.velocity_to_si(totals_final.max_speed),
         );

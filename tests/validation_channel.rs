@@ -88,4 +88,8 @@ fn mass_conservation() {
     );
     assert_checks_pass(&s);
     assert_eq!(s.run.steps, 10_000);
+    // Every run reports its drift per 10⁴ steps; here that is the whole run's.
+    let drift = result(&s, "run.mass_drift_per_1e4_steps");
+    assert!(drift.abs() <= 1e-12, "{drift}");
+    assert!((drift - result(&s, "mass.relative_drift")).abs() < 1e-15);
 }

@@ -59,9 +59,23 @@ pub struct Inputs<'a> {
     pub grains: Option<(GrainDisks, GrainDisks)>,
 }
 
+/// The relative change of the fluid's mass (Σ ρ over the fluid cells) from `initial` to
+/// `last` over `steps` steps, per 10⁴ steps: zero to round-off in a closed domain of plain
+/// walls; grains that cover and uncover cells, and open faces, change it. 0 before a step.
+pub fn mass_drift_per_1e4_steps(initial: f64, last: f64, steps: u64) -> f64 {
+    if steps == 0 || initial == 0.0 {
+        return 0.0;
+    }
+    (last - initial) / initial * 1e4 / steps as f64
+}
+
 /// The result names a scene's analyses will produce (to validate checks before running).
 pub fn result_names(scene: &ValidScene) -> Vec<String> {
-    let mut names = vec!["run.mass".to_string(), "run.max_speed_m_s".to_string()];
+    let mut names = vec![
+        "run.mass".to_string(),
+        "run.mass_drift_per_1e4_steps".to_string(),
+        "run.max_speed_m_s".to_string(),
+    ];
     for a in &scene.scene.analyses {
         match a {
             Analysis::Poiseuille => names.extend(
@@ -178,6 +192,10 @@ pub fn run_all(inp: &Inputs) -> Outcome {
     let mut r = Results::new();
     let u = &inp.scene.units;
     r.insert("run.mass".into(), inp.totals.1.mass);
+    r.insert(
+        "run.mass_drift_per_1e4_steps".into(),
+        mass_drift_per_1e4_steps(inp.totals.0.mass, inp.totals.1.mass, inp.steps),
+    );
     r.insert(
         "run.max_speed_m_s".into(),
         u.velocity_to_si(inp.totals.1.max_speed),

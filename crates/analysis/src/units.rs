@@ -52,6 +52,9 @@ pub fn result_unit(name: &str) -> Option<&'static str> {
     let q = name.rsplit_once('.').map_or(name, |(_, q)| q);
     let explicit = match (name, q) {
         ("run.mass", _) => Some("lattice mass: Σ ρ/ρ₀ over the fluid cells (cells)"),
+        ("run.mass_drift_per_1e4_steps", _) => {
+            Some("1 (relative change of run.mass per 10⁴ steps)")
+        }
         (_, "stop_time" | "front_t95") => Some("√(H_i/g), the column's free-fall time"),
         (_, "kiss_time" | "tumble_time" | "separation_time" | "second_kiss_time") => {
             Some("√(D/g), D the grain diameter")
