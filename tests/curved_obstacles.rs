@@ -60,8 +60,8 @@ fn curved_cylinder_beats_the_staircase_and_matches_a_held_grain() {
 }
 
 /// `wall` belongs to circles, takes one of two values, and is refused as "interpolated"
-/// in a scene with grains (the coupling owns the curved links there); each error names
-/// the key.
+/// in a scene with grains (the coupling owns the curved links there); a curved circle keeps
+/// a cell from faces that are not walls; each error names the key.
 #[test]
 fn curved_wall_mistakes_name_their_key() {
     let dir = tempfile::tempdir().unwrap();
@@ -89,6 +89,13 @@ fn curved_wall_mistakes_name_their_key() {
     let text = check(&cylinder.replace("wall = \"interpolated\"", "wall = \"curved\""));
     assert!(
         text.contains("obstacles") && text.contains("`interpolated` or `staircase`"),
+        "{text}"
+    );
+    // Across an open face the lattice would read the circle's inside as fluid.
+    let at_inlet = cylinder.replace("centre_m = [0.2, 0.2]", "centre_m = [0.052, 0.2]");
+    let text = check(&at_inlet);
+    assert!(
+        text.contains("west face, which is not a wall") && text.contains("`name`"),
         "{text}"
     );
     let grains = std::fs::read_to_string(root().join("tests/scenes/mpi_grains_box.toml")).unwrap();

@@ -333,6 +333,9 @@ fn validate_obstacles(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
                     ));
                 }
                 let r = *radius_m;
+                if s.grains.is_none() && *wall != Some(CircleWall::Staircase) {
+                    curved_clearance(s, ctx, n, o.name(), *centre_m, r)?;
+                }
                 vec![
                     [centre_m[0] - r, centre_m[1] - r],
                     [centre_m[0] + r, centre_m[1] + r],
@@ -373,6 +376,43 @@ fn validate_obstacles(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
                     ),
                 ));
             }
+        }
+    }
+    Ok(())
+}
+
+/// A curved circle (obstacle `n`) keeps at least one cell from every face that is not a
+/// wall: across a periodic, open or free-slip face the lattice reads the cells inside the
+/// circle (which stay fluid cells for the sweep) as fluid.
+fn curved_clearance(
+    s: &Scene,
+    ctx: &Context,
+    n: usize,
+    name: &str,
+    centre: [f64; 2],
+    r: f64,
+) -> Result<(), SceneError> {
+    let dx = s.domain.spacing_m;
+    let (lx, ly) = (s.domain.cells[0] as f64 * dx, s.domain.cells[1] as f64 * dx);
+    let b = &s.boundaries;
+    let faces = [
+        ("west", &b.west, centre[0] - r),
+        ("east", &b.east, lx - centre[0] - r),
+        ("south", &b.south, centre[1] - r),
+        ("north", &b.north, ly - centre[1] - r),
+    ];
+    for (face, spec, gap) in faces {
+        let wall = matches!(spec, BoundarySpec::Wall | BoundarySpec::MovingWall { .. });
+        if !wall && gap < dx {
+            return Err(ctx.err(
+                "name",
+                n,
+                format!(
+                    "circle `{name}` has a curved wall and comes within {gap:.3e} m of the \
+                     {face} face, which is not a wall: keep it at least one cell ({dx} m) \
+                     away, or give it wall = \"staircase\""
+                ),
+            ));
         }
     }
     Ok(())
