@@ -333,9 +333,6 @@ fn validate_obstacles(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
                     ));
                 }
                 let r = *radius_m;
-                if s.grains.is_none() && *wall != Some(CircleWall::Staircase) {
-                    curved_clearance(s, ctx, n, o.name(), *centre_m, r)?;
-                }
                 vec![
                     [centre_m[0] - r, centre_m[1] - r],
                     [centre_m[0] + r, centre_m[1] + r],
@@ -375,6 +372,17 @@ fn validate_obstacles(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
                         p[1]
                     ),
                 ));
+            }
+        }
+        if let Obstacle::Circle {
+            centre_m,
+            radius_m,
+            wall,
+            ..
+        } = o
+        {
+            if s.grains.is_none() && *wall != Some(CircleWall::Staircase) {
+                curved_clearance(s, ctx, n, o.name(), *centre_m, *radius_m)?;
             }
         }
     }
