@@ -133,11 +133,6 @@ impl CurvedWalls {
         }
     }
 
-    /// Whether the slab has anything to do (circles exist in the scene).
-    pub fn is_empty(&self) -> bool {
-        self.circles.is_empty()
-    }
-
     /// The circles, in plan-body order.
     pub fn circles(&self) -> &[CurvedCircle] {
         &self.circles
