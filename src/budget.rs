@@ -21,6 +21,15 @@ pub struct Cost {
     pub memory_bytes: f64,
 }
 
+/// This process's peak resident memory so far (bytes): the kernel's high-water mark,
+/// `VmHWM` in `/proc/self/status`; `None` where it cannot be read (not Linux).
+pub fn peak_resident_bytes() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024.0)
+}
+
 /// This machine's memory (bytes), from `/proc/meminfo`; `None` where it cannot be read.
 pub fn machine_memory_bytes() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -66,49 +75,123 @@ pub fn admit(cost: Cost, comm: &dyn Comm, force: bool) -> Result<(), RunError> {
 const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 
 /// Bytes of a fluid lattice of `cells` (with the one-cell halo) in `buffers` distribution
-/// buffers of `bytes`-byte reals: the populations, the cell types, the fields a snapshot
-/// computes (density, velocity, vorticity in f64) and, coupled, the coupling's per-cell
-/// state ([`COUPLING_BYTES_PER_CELL`]).
-pub fn fluid_bytes(cells: [usize; 2], buffers: f64, bytes: f64, coupled: bool) -> f64 {
+/// buffers of `bytes`-byte reals: the populations, the cell types and the fields the run
+/// keeps ([`CELL_BYTES`]), and `snapshot` bytes per cell while a snapshot is taken
+/// ([`snapshot_bytes_per_cell`]).
+pub fn fluid_bytes(cells: [usize; 2], buffers: f64, bytes: f64, snapshot: f64) -> f64 {
     let n = (cells[0] as f64 + 2.0) * (cells[1] as f64 + 2.0);
-    let coupling = if coupled {
-        COUPLING_BYTES_PER_CELL
-    } else {
-        0.0
-    };
-    n * (buffers * 9.0 * bytes + 2.0 + 4.0 * 8.0 + coupling)
+    n * (buffers * 9.0 * bytes + CELL_BYTES + snapshot)
 }
 
-/// What a coupled run holds per lattice cell beyond the fluid's (bytes): the covering-grain
-/// maps and marks, the partially saturated cells' shares and the snapshot's conversions, as
-/// the resident memory of a 50.9 M-cell coupled run measured it.
-pub const COUPLING_BYTES_PER_CELL: f64 = 43.0;
-
-/// Bytes per grain: its state, its contacts' history and its neighbour lists (about).
-pub const GRAIN_BYTES: f64 = 1024.0;
-/// Bytes per material point (25 words) and per background-grid node (about 12 words).
-pub const POINT_BYTES: f64 = 200.0;
-/// See [`POINT_BYTES`].
-pub const NODE_BYTES: f64 = 96.0;
-
-/// The cost of a fluid (or coupled) run of `steps` steps in `bytes`-byte reals, in one
-/// distribution buffer (`in_place`) or two.
-pub fn fluid_cost(scene: &scene::ValidScene, steps: u64, bytes: f64, in_place: bool) -> Cost {
-    let buffers = if in_place { 1.0 } else { 2.0 };
-    let coupled = scene.scene.grains.is_some();
-    Cost {
-        steps,
-        memory_bytes: fluid_bytes(scene.scene.domain.cells, buffers, bytes, coupled),
+/// What a snapshot of a fluid scene with `output` adds per cell of the whole lattice, all
+/// ranks together (bytes): the fields in f64 and their conversions for the HDF5 file
+/// ([`SNAPSHOT_BYTES_PER_CELL`], each rank its slab) and the pictured field gathered on
+/// rank 0 ([`PICTURE_BYTES_PER_CELL`]). On one rank the two are not held together.
+pub fn snapshot_bytes_per_cell(output: &scene::Output, ranks: usize) -> f64 {
+    let fields = !output.fields().is_empty();
+    let pictures = output.pictures();
+    match (ranks <= 1, fields, pictures) {
+        (_, false, false) => 0.0,
+        (true, _, _) => SNAPSHOT_BYTES_PER_CELL,
+        (false, f, p) => {
+            f64::from(u8::from(f)) * SNAPSHOT_BYTES_PER_CELL
+                + f64::from(u8::from(p)) * PICTURE_BYTES_PER_CELL
+        }
     }
 }
 
-/// The cost of an MPM run of `steps` steps.
-pub fn mpm_cost(scene: &scene::ValidMpmScene, steps: u64) -> Cost {
+/// What a fluid run holds per cell beyond its populations (bytes): the cell types, the
+/// totals' fields and the row plans, as the peak resident memory of a 1024² box without
+/// snapshots measured it (`tests/memory_estimate.rs`). A coupled run's maps and shares
+/// per cell fit in it: the 51 M-cell landslide measured nothing more.
+pub const CELL_BYTES: f64 = 24.0;
+
+/// What a snapshot adds per cell while it is taken (bytes): the fields in f64 and their
+/// conversions for the HDF5 file, as the peak resident memory of a 1024² box measured it in
+/// f32 and f64.
+pub const SNAPSHOT_BYTES_PER_CELL: f64 = 52.0;
+
+/// What the pictures add on rank 0 per cell of the whole lattice (bytes): the gathered
+/// field and its colours, as a 1024² box on two ranks measured it.
+pub const PICTURE_BYTES_PER_CELL: f64 = 40.0;
+
+/// What the one process of a run without MPI holds whatever its scene (bytes): the
+/// program and its libraries (MPI, HDF5, the GPU loader), thread stacks and the
+/// allocator's pools, as the peak resident memory of the smallest runs measured it.
+pub const PROCESS_BYTES: f64 = 24.0 * 1048576.0;
+/// What each rank of an MPI run holds whatever its scene (bytes): [`PROCESS_BYTES`] and
+/// Open MPI's own buffers, as a 1024² box on two ranks measured it.
+pub const RANK_BYTES: f64 = 30.0 * 1048576.0;
+
+/// Bytes per grain of a grains run: its state, its contacts' history, its neighbour
+/// lists, the packing's working copies and a snapshot's conversions, as the peak resident
+/// memory of a 113 000-grain run measured it (`tests/memory_estimate.rs`).
+pub const GRAIN_BYTES: f64 = 560.0;
+/// Bytes per grain of a coupled run: a grains run's and the coupling's per-grain state
+/// (its views, hand-over loads, carried forces and covered-cell lists), as the peak
+/// resident memory of the 209 000-grain landslide measured it.
+pub const COUPLED_GRAIN_BYTES: f64 = 1024.0;
+/// Bytes per material point: its 25 words, the step's working arrays (next positions,
+/// gradients, the sorting scratch), the scene's generated copy and a snapshot's
+/// conversions, as the peak resident memory of 0.6 and 1.3 million-point runs measured it.
+pub const POINT_BYTES: f64 = 680.0;
+/// Bytes per background-grid node (about 12 words). See [`POINT_BYTES`].
+pub const NODE_BYTES: f64 = 32.0;
+
+/// The cost of a fluid (or coupled) run of `steps` steps in `bytes`-byte reals, in one
+/// distribution buffer (`in_place`) or two, on `ranks` processes: the lattice, a coupled
+/// scene's estimated grains and each process's own memory.
+pub fn fluid_cost(
+    scene: &scene::ValidScene,
+    steps: u64,
+    bytes: f64,
+    in_place: bool,
+    ranks: usize,
+) -> Cost {
+    let buffers = if in_place { 1.0 } else { 2.0 };
+    let grains = scene.scene.grains.as_ref();
+    let grain_bytes = grains
+        .and_then(|g| scene::estimated_grains(&g.sample))
+        .map_or(0.0, |n| n * COUPLED_GRAIN_BYTES);
+    Cost {
+        steps,
+        memory_bytes: fluid_bytes(
+            scene.scene.domain.cells,
+            buffers,
+            bytes,
+            snapshot_bytes_per_cell(&scene.scene.output, ranks),
+        ) + grain_bytes
+            + processes(ranks),
+    }
+}
+
+/// The cost of a grains run of `steps` steps holding about `grains` grains on `ranks`
+/// processes.
+pub fn grain_cost(grains: f64, steps: u64, ranks: usize) -> Cost {
+    Cost {
+        steps,
+        memory_bytes: grains * GRAIN_BYTES + processes(ranks),
+    }
+}
+
+/// The cost of an MPM run of `steps` steps on `ranks` processes.
+pub fn mpm_cost(scene: &scene::ValidMpmScene, steps: u64, ranks: usize) -> Cost {
     let g = scene.setup.spec;
     let nodes = (g.nx as f64 + 1.0) * (g.ny as f64 + 1.0);
     Cost {
         steps,
-        memory_bytes: scene.points.len() as f64 * POINT_BYTES + nodes * NODE_BYTES,
+        memory_bytes: scene.points.len() as f64 * POINT_BYTES
+            + nodes * NODE_BYTES
+            + processes(ranks),
+    }
+}
+
+/// What `ranks` processes hold whatever their scene: [`PROCESS_BYTES`] alone, or
+/// [`RANK_BYTES`] each under MPI.
+fn processes(ranks: usize) -> f64 {
+    match ranks {
+        0 | 1 => PROCESS_BYTES,
+        n => n as f64 * RANK_BYTES,
     }
 }
 

@@ -74,7 +74,13 @@ fn assess_into(
                 Precision::F32 => 4.0,
                 Precision::F64 => 8.0,
             };
-            Some(budget::fluid_cost(s, step_count(s, None, None), bytes, one))
+            Some(budget::fluid_cost(
+                s,
+                step_count(s, None, None),
+                bytes,
+                one,
+                ranks,
+            ))
         }
         scene::AnyScene::Grains(g) => {
             say!(out, "{}: valid grains scene", g.path.display());
@@ -90,10 +96,7 @@ fn assess_into(
                     time_loop::particle_last_step((None, None), (r.steps, r.end_time_s), dt);
                 say!(out, "  time step: {dt:.4e} s (the smallest grain's)");
                 let grains = g.estimated_grains().unwrap_or(0.0);
-                budget::Cost {
-                    steps,
-                    memory_bytes: grains * budget::GRAIN_BYTES,
-                }
+                budget::grain_cost(grains, steps, ranks)
             })
         }
         scene::AnyScene::Mpm(m) => {
@@ -101,7 +104,7 @@ fn assess_into(
             let r = &m.scene.run;
             let steps =
                 time_loop::particle_last_step((None, None), (r.steps, r.end_time_s), m.setup.dt);
-            Some(budget::mpm_cost(m, steps))
+            Some(budget::mpm_cost(m, steps, ranks))
         }
     };
     let Some(cost) = cost else {
@@ -323,15 +326,16 @@ fn print_check(
     let one = s.scene.run.backend == scene::Backend::Cpu
         && crate::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
     let buffers = if one { 1.0 } else { 2.0 };
-    let coupled = s.scene.grains.is_some();
-    let bytes = |b: f64| budget::fluid_bytes([nx, ny], buffers, b, coupled);
+    let snapshot = budget::snapshot_bytes_per_cell(&s.scene.output, 1);
+    let bytes = |b: f64| budget::fluid_bytes([nx, ny], buffers, b, snapshot);
     say!(
         out,
-        "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 ({} distribution buffer{}, cell types, snapshot fields)",
+        "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 ({} distribution buffer{}, cell types{})",
         bytes(8.0) / 1048576.0,
         bytes(4.0) / 1048576.0,
         buffers,
-        if one { ", in place" } else { "s" }
+        if one { ", in place" } else { "s" },
+        if snapshot > 0.0 { ", snapshot fields" } else { "" }
     );
     let mut stable = true;
     let mut load = None;

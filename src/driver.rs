@@ -79,6 +79,11 @@ pub struct RunHeader {
     pub stage_seconds: BTreeMap<&'static str, f64>,
     /// Seconds per stage over ranks: sum, max, min, mean (load imbalance shows as max ≫ min).
     pub stages: BTreeMap<&'static str, StageStats>,
+    /// The memory `check` estimates for the run, all ranks together (bytes).
+    pub memory_estimate_bytes: f64,
+    /// The peak resident memory of each rank's process (its high-water mark at the end of
+    /// the run) summed over the ranks (bytes); `null` where the system does not say.
+    pub peak_memory_bytes: Option<f64>,
     /// Checkpoints written during the run.
     pub checkpoints: Vec<PathBuf>,
     /// Results of the analyses.
@@ -130,6 +135,8 @@ impl RunHeader {
             wall_time_s: 0.0,
             stage_seconds: BTreeMap::new(),
             stages: BTreeMap::new(),
+            memory_estimate_bytes: f64::NAN,
+            peak_memory_bytes: None,
             checkpoints: Vec::new(),
             results: Results::new(),
             checks: Vec::new(),
@@ -173,6 +180,15 @@ impl RunHeader {
                 reason: e.message.clone(),
             })
             .collect();
+    }
+
+    /// Record `check`'s memory estimate for the run and the ranks' summed peak resident
+    /// memory (collective; call it last, after the output is written).
+    pub fn set_memory(&mut self, estimate_bytes: f64, comm: &dyn Comm) {
+        self.memory_estimate_bytes = estimate_bytes;
+        let mut peak = [crate::budget::peak_resident_bytes().unwrap_or(f64::NAN)];
+        comm.sum_f64(&mut peak);
+        self.peak_memory_bytes = peak[0].is_finite().then_some(peak[0]);
     }
 
     /// Fill in the stage timings from each rank's `clocks` (the solver's and the time

@@ -177,6 +177,8 @@ struct FluidStepper<'a, T: Real + hdf5::H5Type> {
     totals_initial: Totals,
     momentum_initial: Option<[[f64; 2]; 2]>,
     grains_initial: Vec<[f64; 3]>,
+    /// `check`'s memory estimate for the run, all ranks (bytes).
+    memory_estimate: f64,
 }
 
 impl<T: Real + hdf5::H5Type> Stepper for FluidStepper<'_, T> {
@@ -413,7 +415,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
     let one_buffer = devices.0 == Backend::Cpu
         && crate::simulation::in_place(devices.2, scene.scene.grains.is_some());
     let bytes = std::mem::size_of::<T>() as f64;
-    let cost = crate::budget::fluid_cost(scene, n, bytes, one_buffer);
+    let cost = crate::budget::fluid_cost(scene, n, bytes, one_buffer, comm.size());
     crate::budget::admit(cost, comm, opts.force)?;
     let (sim, totals_initial, momentum_initial, grains_initial) =
         set_up::<T>(scene, opts, devices, comm)?;
@@ -439,6 +441,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         totals_initial,
         momentum_initial,
         grains_initial,
+        memory_estimate: cost.memory_bytes,
     };
     if start_step == 0 {
         stepper.sim.record_probes(comm);
@@ -629,6 +632,7 @@ fn summarise<T: Real + hdf5::H5Type>(
     header.checkpoints = end.checkpoints.clone();
     header.results = results;
     header.judge(checks, &skipped, end.shortened);
+    header.set_memory(st.memory_estimate, comm);
     let summary = Summary {
         run: header,
         scene: scene.scene.clone(),

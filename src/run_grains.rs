@@ -85,6 +85,8 @@ pub struct GrainStepper<'a> {
     settle_steps: u64,
     /// (x, y, r) of every grain at the start, by id.
     initial: Grains,
+    /// `check`'s memory estimate for the run, all ranks (bytes).
+    memory_estimate: f64,
     /// When the last wall goes (s).
     last_removal: f64,
     grains: usize,
@@ -223,10 +225,11 @@ pub fn run_grains(
         (s.run.steps, s.run.end_time_s),
         dt,
     );
-    let cost = crate::budget::Cost {
-        steps: last_step.saturating_sub(d.system.steps),
-        memory_bytes: grains as f64 * crate::budget::GRAIN_BYTES,
-    };
+    // The packing before its settling trim holds more grains than the run: the scene's
+    // estimate, as `check` gives it, bounds the peak.
+    let held = scene.estimated_grains().unwrap_or(0.0).max(grains as f64);
+    let cost =
+        crate::budget::grain_cost(held, last_step.saturating_sub(d.system.steps), comm.size());
     crate::budget::admit(cost, comm, opts.force)?;
     let mut progress = Progress::new(
         last_step,
@@ -282,6 +285,7 @@ pub fn run_grains(
             .filter_map(|w| w.remove_at_s)
             .fold(0.0, f64::max),
         grains,
+        memory_estimate: cost.memory_bytes,
         clock: StageClock::new(&GRAIN_STAGES),
     };
     let end = drive(&mut stepper, &plan, &mut progress, comm)?;
@@ -397,6 +401,7 @@ fn summarise(
     header.checkpoints = end.checkpoints.clone();
     header.results = results;
     header.judge(checks, &[], end.shortened);
+    header.set_memory(st.memory_estimate, comm);
     let steps = (d.system.steps - end.start_step) as f64;
     let summary = GrainSummary {
         run: header,

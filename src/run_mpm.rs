@@ -162,6 +162,8 @@ pub struct MpmStepper<'a> {
     settle_after_s: f64,
     /// This rank's seconds in [`OBSERVE`].
     clock: StageClock,
+    /// `check`'s memory estimate for the run, all ranks (bytes).
+    memory_estimate: f64,
 }
 
 impl Stepper for MpmStepper<'_> {
@@ -281,7 +283,7 @@ pub fn run_mpm(
         scene.setup.dt,
     );
     let done = resume.map_or(0, |r| r.step);
-    let cost = crate::budget::mpm_cost(scene, last_step.saturating_sub(done));
+    let cost = crate::budget::mpm_cost(scene, last_step.saturating_sub(done), comm.size());
     crate::budget::admit(cost, comm, opts.force)?;
     let mut sys = MpmSystem::new(scene.setup.clone(), points, comm)?;
     let initial_shape = match (&resume, collapse_of(s).0) {
@@ -348,6 +350,7 @@ pub fn run_mpm(
         initial_shape,
         settle_after_s: 0.1 * scene.end_time_s(),
         clock: StageClock::new(&OBSERVE),
+        memory_estimate: cost.memory_bytes,
     };
     let end = drive(&mut stepper, &plan, &mut progress, comm)?;
     if comm.is_root() && s.output.pictures() {
@@ -432,6 +435,7 @@ fn summarise(
     header.checkpoints = end.checkpoints.clone();
     header.results = results;
     header.judge(checks, &[], end.shortened);
+    header.set_memory(st.memory_estimate, comm);
     let spec = scene.setup.spec;
     let steps = (sys.steps - end.start_step) as f64;
     let summary = MpmSummary {

@@ -79,6 +79,23 @@ fn contact_model(c: &ContactSpec) -> ContactModel {
 
 /// Grains a packed rectangle will hold: its area times the solid fraction over the mean of
 /// the smallest and largest disk's area (within a factor of 2 for these distributions).
+/// About how many grains `sample` holds: listed ones, or a packed rectangle's share
+/// (area × solid fraction over the mean of the extreme disks' areas, before any settling
+/// trim); `None` for a CSV file, whose grains are read at run time.
+pub fn estimated_grains(sample: &SampleSpec) -> Option<f64> {
+    match sample {
+        SampleSpec::List { grains } => Some(grains.len() as f64),
+        SampleSpec::Pack {
+            min_m,
+            max_m,
+            sizes,
+            solid_fraction,
+            ..
+        } => Some(packed_grains(*min_m, *max_m, sizes, *solid_fraction)),
+        SampleSpec::Csv { .. } => None,
+    }
+}
+
 fn packed_grains(min_m: [f64; 2], max_m: [f64; 2], sizes: &SizeSpec, solid_fraction: f64) -> f64 {
     let d = size_distribution(sizes);
     let (r0, r1) = (d.min_radius(), d.max_radius());
@@ -556,17 +573,7 @@ impl ValidGrainScene {
     /// (area × solid fraction over the mean of the extreme disks' areas); `None` for a CSV
     /// file.
     pub fn estimated_grains(&self) -> Option<f64> {
-        match &self.scene.grains.sample {
-            SampleSpec::List { grains } => Some(grains.len() as f64),
-            SampleSpec::Pack {
-                min_m,
-                max_m,
-                sizes,
-                solid_fraction,
-                ..
-            } => Some(packed_grains(*min_m, *max_m, sizes, *solid_fraction)),
-            SampleSpec::Csv { .. } => None,
-        }
+        estimated_grains(&self.scene.grains.sample)
     }
 
     /// The time step for `grains` (s): the fixed one, or λ Δt_cr of the lightest grain.

@@ -27,7 +27,9 @@ mod validate;
 
 pub use build::{build_lattice, lattice_collision, solid_id_of, BuiltGeometry};
 pub use grains::*;
-pub use grains_check::{grain_result_names, parse_grains, size_distribution, ValidGrainScene};
+pub use grains_check::{
+    estimated_grains, grain_result_names, parse_grains, size_distribution, ValidGrainScene,
+};
 pub use lbm::gpu::GpuStorage;
 pub use lbm::units::{derive, TimeStepChoice, Units};
 pub use mpm::*;
