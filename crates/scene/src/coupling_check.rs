@@ -254,8 +254,11 @@ pub(super) fn validate(
 
 /// The speed the largest grain may reach (m/s): its terminal speed as a 2-D disk (White's
 /// cylinder drag C_D = 1 + 10 Re^(−2/3), U_t = √(π g d (ρ_s/ρ − 1) / (2 C_D))), or free fall
-/// under reduced gravity across the domain, √(2 g (1 − ρ/ρ_s) L), whichever is smaller.
-/// `None` without gravity or a known grain size.
+/// under reduced gravity across the domain, √(2 g (1 − ρ/ρ_s) L), whichever is smaller;
+/// and when a gate releases a packed mass of height H, at least the speed of its collapse,
+/// √(g (1 − ρ/ρ_s) H) (the front's speed scale in column collapses, Lajeunesse, Monnier &
+/// Homsy 2005; the mass and the liquid it drives move together, faster than one grain
+/// settles). `None` without gravity or a known grain size.
 pub fn grain_speed_estimate(scene: &Scene, spec: &GrainsSpec) -> Option<f64> {
     let g = spec.gravity_m_s2[0].hypot(spec.gravity_m_s2[1]);
     let (_, r) = radius_range(&spec.sample)?;
@@ -280,8 +283,28 @@ pub fn grain_speed_estimate(scene: &Scene, spec: &GrainsSpec) -> Option<f64> {
         spec.gravity_m_s2[1].abs() / g,
     ];
     let length = (dm.cells[0] as f64 * dir[0] + dm.cells[1] as f64 * dir[1]) * dm.spacing_m;
-    let fall = (2.0 * g * (1.0 - rho / rho_s) * length).sqrt();
-    Some(u.min(fall))
+    let reduced = g * (1.0 - rho / rho_s);
+    let fall = (2.0 * reduced * length).sqrt();
+    let gate = spec.walls.iter().any(|w| w.remove_at_s.is_some());
+    let collapse = match (&spec.sample, gate) {
+        (
+            SampleSpec::Pack {
+                min_m,
+                max_m,
+                settle,
+                ..
+            },
+            true,
+        ) => {
+            let top = settle
+                .as_ref()
+                .and_then(|s| s.trim_above_m)
+                .map_or(max_m[1], |t| t.min(max_m[1]));
+            (reduced * (top - min_m[1]).max(0.0)).sqrt()
+        }
+        _ => 0.0,
+    };
+    Some(u.min(fall).max(collapse))
 }
 
 /// A warning when the grains may move faster than the reference velocity the lattice was
@@ -293,8 +316,8 @@ fn speed_warning(scene: &Scene, spec: &GrainsSpec, units: &Units) -> Option<Stri
     let mach = lattice * 3f64.sqrt();
     (mach > 0.3 && u > scene.fluid.reference_velocity_m_s).then(|| {
         format!(
-            "the grains may reach about {u:.3e} m/s (terminal speed of the largest, or free fall \
-             across the domain), {lattice:.3} cells per step (Ma {mach:.2}), against \
+            "the grains may reach about {u:.3e} m/s (terminal speed of the largest, free fall \
+             across the domain, or a released mass collapsing), {lattice:.3} cells per step (Ma {mach:.2}), against \
              reference_velocity_m_s = {}: expect large compressibility errors{}; set \
              reference_velocity_m_s near {u:.2e}",
             scene.fluid.reference_velocity_m_s,
