@@ -79,8 +79,9 @@ pub struct GrainStepper<'a> {
     picture: io::figure::PictureStyle,
     /// Wall and floor of a column-collapse analysis.
     collapse_at: Option<(f64, f64)>,
-    /// (t, deposit length) every 1000 steps of a collapse that did not restart.
-    fronts: Vec<(f64, f64)>,
+    /// (t, deposit length, kinetic energy) every 1000 steps of a collapse that did not
+    /// restart (s, m, J/m).
+    fronts: Vec<(f64, f64, f64)>,
     start_step: u64,
     settle_steps: u64,
     /// (x, y, r) of every grain at the start, by id.
@@ -170,7 +171,8 @@ impl GrainStepper<'_> {
         ) {
             let g = gather_grains(&self.d.system, comm);
             let length = pile_shape(&g.x, &g.y, &g.r, wx, fy).length_m;
-            self.fronts.push((self.d.system.time, length));
+            let (ke, _, _) = global_state(&self.d, comm);
+            self.fronts.push((self.d.system.time, length, ke));
         }
         if !step.is_multiple_of(100) && !due.last {
             return Flow::Go;
@@ -347,17 +349,16 @@ fn collapse_analysis(st: &GrainStepper, end: &LoopEnd, g_abs: f64, comm: &dyn Co
         for (k, v) in QUANTITIES.iter().zip(values) {
             results.insert(format!("collapse.{k}"), v);
         }
-        // When the front first reached 95 % of its run-out, in τ_c (not after a restart:
-        // the series before it is gone).
-        let target = before.length_m + 0.95 * (after.length_m - before.length_m);
-        let t95 = st
-            .fronts
-            .iter()
-            .find(|f| f.1 >= target)
-            .map_or(f64::NAN, |f| {
-                (f.0 - st.last_removal) / (before.height_m / g_abs).sqrt()
-            });
-        results.insert("collapse.front_t95".into(), t95);
+        // When the front passed 10 % and 95 % of its run-out, in τ_c, and its mean speed
+        // between (not after a restart: the series before it is gone).
+        let times: Vec<f64> = st.fronts.iter().map(|f| f.0 - st.last_removal).collect();
+        let fronts: Vec<f64> = st.fronts.iter().map(|f| f.1).collect();
+        let [t10, t95, speed] =
+            analysis::collapse::front_timing(&times, &fronts, before.length_m, after.length_m);
+        let tau_c = (before.height_m / g_abs).sqrt();
+        results.insert("collapse.front_t95".into(), t95 / tau_c);
+        results.insert("collapse.front_t10".into(), t10 / tau_c);
+        results.insert("collapse.front_speed_m_s".into(), speed);
     }
     results
 }
@@ -422,6 +423,13 @@ fn summarise(
         snapshots: st.writer.snapshots(),
     };
     if comm.is_root() {
+        if !st.fronts.is_empty() {
+            let mut csv = String::from("time_s,front_m,kinetic_energy_j_m\n");
+            for (t, x, ke) in &st.fronts {
+                csv.push_str(&format!("{t:.9e},{x:.9e},{ke:.9e}\n"));
+            }
+            write_atomic(&out_dir.join("front.csv"), csv.as_bytes())?;
+        }
         let json = crate::summary_units::summary_json(&summary);
         write_atomic(&out_dir.join("summary.json"), &json)?;
     }

@@ -89,6 +89,26 @@ pub fn experiment_law(a: f64) -> f64 {
 
 pub use scene::collapse_names::{QUANTITIES, THICK_QUANTITIES};
 
+/// When the front moved and how fast, from its position `fronts` (m from the wall) at
+/// `times` (s, from the release): `[t₁₀, t₉₅, speed]`, the first times the front passed
+/// 10 % and 95 % of its run-out from `li` to `lf` (s; NaN when it never did) and its mean
+/// speed between them, 0.85 (lf − li)/(t₉₅ − t₁₀) (m/s). A mass that does not move
+/// (lf ≤ li) has NaN times and speed 0.
+pub fn front_timing(times: &[f64], fronts: &[f64], li: f64, lf: f64) -> [f64; 3] {
+    if !(lf > li) {
+        return [f64::NAN, f64::NAN, 0.0];
+    }
+    let at = |frac: f64| {
+        let target = li + frac * (lf - li);
+        fronts
+            .iter()
+            .position(|&x| x >= target)
+            .map_or(f64::NAN, |j| times[j])
+    };
+    let (t10, t95) = (at(0.10), at(0.95));
+    [t10, t95, 0.85 * (lf - li) / (t95 - t10)]
+}
+
 /// The collapse results, in the order of [`QUANTITIES`], from the column `before` and the
 /// deposit `after`, gravity `g` (m/s²) and the time the flow took (s):
 /// run-out (L_f − L_i)/L_i, H_f/L_i, a = H_i/L_i, L_f, H_f, L_i, H_i, the flow time in
@@ -146,17 +166,19 @@ pub fn submerged(
         .iter()
         .find(|s| s.name == deposit)
         .ok_or_else(|| super::err("column-collapse", format!("no deposit probe `{deposit}`")))?;
-    // The front's series: the first time it comes within 5 % of its final run-out.
-    let (li, lf) = (before.length_m, after.length_m);
-    let target = li + 0.95 * (lf - li);
-    let t95 = (0..series.len())
-        .find(|&j| series.values[j * series.columns.len()] >= target)
-        .map_or(f64::NAN, |j| series.times[j]);
+    // The front's series: when it passed 10 % and 95 % of its final run-out.
+    let fronts: Vec<f64> = (0..series.len())
+        .map(|j| series.values[j * series.columns.len()])
+        .collect();
+    let [t10, t95, speed] = front_timing(&series.times, &fronts, before.length_m, after.length_m);
     let values = collapse_results(before, after, g, t95);
     for (k, v) in QUANTITIES.iter().zip(values) {
         r.insert(format!("collapse.{k}"), v);
     }
+    let tau_c = (before.height_m / g).sqrt();
     r.insert("collapse.front_t95".into(), values[7]);
+    r.insert("collapse.front_t10".into(), t10 / tau_c);
+    r.insert("collapse.front_speed_m_s".into(), speed);
     // The column: grains within it at the start (all of them, for a column behind a gate).
     let area: f64 = start
         .iter()
@@ -278,5 +300,26 @@ mod tests {
         let r = thick_front_results(before, 2.0);
         assert_eq!(r[1], 1.0);
         assert!((r[2] - 1.0 / 1.2).abs() < 1e-12);
+    }
+}
+
+#[cfg(test)]
+mod front_tests {
+    use super::front_timing;
+
+    #[test]
+    fn a_front_moving_at_constant_speed_has_that_speed() {
+        // From 0.1 m at 0.5 m/s for 0.4 s, then at rest at 0.3 m.
+        let times: Vec<f64> = (0..=100).map(|k| k as f64 * 0.01).collect();
+        let fronts: Vec<f64> = times.iter().map(|&t| 0.1 + 0.5 * t.min(0.4)).collect();
+        let [t10, t95, speed] = front_timing(&times, &fronts, 0.1, 0.3);
+        assert!(
+            (t10 - 0.04).abs() < 1e-12 && (t95 - 0.38).abs() < 1e-12,
+            "{t10} {t95}"
+        );
+        assert!((speed - 0.5).abs() < 1e-9, "{speed}");
+        // A mass that stayed put moved at no speed and never passed its marks.
+        let still = front_timing(&times, &vec![0.1; times.len()], 0.1, 0.1);
+        assert!(still[0].is_nan() && still[1].is_nan() && still[2] == 0.0);
     }
 }

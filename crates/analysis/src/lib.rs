@@ -136,6 +136,8 @@ pub fn result_names(scene: &ValidScene) -> Vec<String> {
                 names.extend(
                     [
                         "front_t95",
+                        "front_t10",
+                        "front_speed_m_s",
                         "packing_fraction",
                         "pore_pressure_min_pa",
                         "pore_pressure_max_pa",

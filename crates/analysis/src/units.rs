@@ -55,7 +55,9 @@ pub fn result_unit(name: &str) -> Option<&'static str> {
         ("run.mass_drift_per_1e4_steps", _) => {
             Some("1 (relative change of run.mass per 10⁴ steps)")
         }
-        (_, "stop_time" | "front_t95") => Some("√(H_i/g), the column's free-fall time"),
+        (_, "stop_time" | "front_t95" | "front_t10") => {
+            Some("√(H_i/g), the column's free-fall time")
+        }
         (_, "kiss_time" | "tumble_time" | "separation_time" | "second_kiss_time") => {
             Some("√(D/g), D the grain diameter")
         }

@@ -28,7 +28,9 @@ pub fn grain_result_names(s: &GrainScene) -> Vec<String> {
                 for q in crate::collapse_names::QUANTITIES {
                     names.push(format!("collapse.{q}"));
                 }
-                names.push("collapse.front_t95".into());
+                for q in ["front_t95", "front_t10", "front_speed_m_s"] {
+                    names.push(format!("collapse.{q}"));
+                }
             }
         }
     }
