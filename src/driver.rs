@@ -79,6 +79,14 @@ pub struct RunHeader {
     pub stage_seconds: BTreeMap<&'static str, f64>,
     /// Seconds per stage over ranks: sum, max, min, mean (load imbalance shows as max ≫ min).
     pub stages: BTreeMap<&'static str, StageStats>,
+    /// Bytes sent between ranks per step of the loop (halo faces, ghost grains, migrations,
+    /// grid strips), all ranks together.
+    pub message_bytes_per_step: f64,
+    /// Point-to-point messages per step of the loop, the busiest rank's.
+    pub messages_per_step: f64,
+    /// Collective calls per step of the loop (reductions, gathers, barriers; snapshots'
+    /// gathers included), the busiest rank's; 0 on one process.
+    pub collectives_per_step: f64,
     /// The memory `check` estimates for the run, all ranks together (bytes).
     pub memory_estimate_bytes: f64,
     /// The peak resident memory of each rank's process (its high-water mark at the end of
@@ -135,6 +143,9 @@ impl RunHeader {
             wall_time_s: 0.0,
             stage_seconds: BTreeMap::new(),
             stages: BTreeMap::new(),
+            message_bytes_per_step: 0.0,
+            messages_per_step: 0.0,
+            collectives_per_step: 0.0,
             memory_estimate_bytes: f64::NAN,
             peak_memory_bytes: None,
             checkpoints: Vec::new(),
@@ -189,6 +200,17 @@ impl RunHeader {
         let mut peak = [crate::budget::peak_resident_bytes().unwrap_or(f64::NAN)];
         comm.sum_f64(&mut peak);
         self.peak_memory_bytes = peak[0].is_finite().then_some(peak[0]);
+    }
+
+    /// Record the loop's communication per step from each rank's `traffic` over the steps
+    /// it ran (collective; after `steps` and `restarted_from_step` are set).
+    pub fn set_traffic(&mut self, traffic: decomposition::Traffic, comm: &dyn Comm) {
+        let steps = self.steps.saturating_sub(self.restarted_from_step).max(1) as f64;
+        let mut bytes = [traffic.sent_bytes as f64];
+        comm.sum_f64(&mut bytes);
+        self.message_bytes_per_step = bytes[0] / steps;
+        self.messages_per_step = comm.max_f64(traffic.messages as f64) / steps;
+        self.collectives_per_step = comm.max_f64(traffic.collectives as f64) / steps;
     }
 
     /// Fill in the stage timings from each rank's `clocks` (the solver's and the time

@@ -627,6 +627,7 @@ fn summarise<T: Real + hdf5::H5Type>(
     header.simulated_time_s = scene.units.time_si(steps);
     header.wall_time_s = wall;
     let solver_clock = StageClock::with_seconds(&STAGES, &sim.times.seconds);
+    header.set_traffic(end.traffic, comm);
     header.set_stages(&[&solver_clock, &end.clock], comm);
     let kernel_s = header.stage_seconds[STAGES[stage::COLLIDE_STREAM]];
     header.checkpoints = end.checkpoints.clone();

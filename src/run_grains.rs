@@ -398,6 +398,7 @@ fn summarise(
     header.simulated_time_s = d.system.time;
     header.settled_at_s = end.settled_s;
     header.wall_time_s = end.wall_s;
+    header.set_traffic(end.traffic, comm);
     header.set_stages(&[&st.clock, &end.clock], comm);
     header.checkpoints = end.checkpoints.clone();
     header.results = results;

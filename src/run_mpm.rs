@@ -431,6 +431,7 @@ fn summarise(
     header.settled_at_s = end.settled_s;
     header.wall_time_s = end.wall_s;
     let solver = StageClock::with_seconds(&MPM_STAGES, &sys.seconds);
+    header.set_traffic(end.traffic, comm);
     header.set_stages(&[&solver, &st.clock, &end.clock], comm);
     header.checkpoints = end.checkpoints.clone();
     header.results = results;

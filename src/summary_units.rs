@@ -9,10 +9,18 @@ use serde_json::{Map, Value};
 
 /// Units of the summary keys without a unit suffix (a dotted path; `*.` before it: any
 /// section's key; `.*` after it: any key of that section).
-const KEY_UNITS: [(&str, &str); 35] = [
+const KEY_UNITS: [(&str, &str); 37] = [
     ("coupling_counts.*", "count"),
     ("coupling_pass_seconds.*", "s"),
     ("ranks", "count"),
+    (
+        "messages_per_step",
+        "point-to-point messages per step, the busiest rank's",
+    ),
+    (
+        "collectives_per_step",
+        "collective calls per step, the busiest rank's",
+    ),
     ("threads", "count"),
     ("restarted_from_step", "step number"),
     ("steps", "step number"),

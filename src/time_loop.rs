@@ -139,6 +139,9 @@ pub struct LoopEnd {
     pub next_output_s: f64,
     /// The plan's [`LoopPlan::shortened`].
     pub shortened: bool,
+    /// What this rank sent through the loop's steps and their snapshots (not the final
+    /// snapshot and checkpoint).
+    pub traffic: decomposition::Traffic,
 }
 
 /// The stages the loop times itself; each solver times its own.
@@ -175,7 +178,9 @@ pub fn drive(
         clock: StageClock::new(&LOOP_STAGES),
         next_output_s: plan.next_output_s,
         shortened: plan.shortened,
+        traffic: decomposition::Traffic::default(),
     };
+    let traffic_at_start = decomposition::Traffic::now();
     let mut checkpoint_at = None;
     let mut last_checkpoint = Instant::now();
     let started = Instant::now();
@@ -230,6 +235,7 @@ pub fn drive(
         }
     }
     end.wall_s = started.elapsed().as_secs_f64();
+    end.traffic = decomposition::Traffic::now().since(traffic_at_start);
     progress.finish();
     finish(
         stepper,

@@ -5,7 +5,7 @@
 //! a periodic seam; a coupled checkpoint restarted on another rank count continues bit for
 //! bit. `cargo test --release --test mpi_coupled -- --nocapture` prints the runs.
 mod common;
-use common::{assert_bit_identical, assert_grains_identical, grainflow, run_ok, summary};
+use common::{assert_bit_identical, assert_grains_identical, grainflow, root, run_ok, summary};
 use std::path::Path;
 
 /// `scene` with its `[coupling] scheme` replaced, written into `dir`.
@@ -249,4 +249,43 @@ fn coupled_gpu_runs_on_2_ranks_match_1_gpu_rank() {
         assert_grains_identical(&one, &two);
         eprintln!("{scheme}: 2 GPU ranks match 1 GPU rank bit for bit");
     }
+}
+
+/// A run reports what its ranks sent each step, the inputs of `scripts/scaling-model`: one
+/// process sends nothing; on two ranks the messages carry the fluid's halo faces and the
+/// ghost grains (more bytes than the faces alone), and the ranks agree through collectives.
+#[test]
+fn runs_report_their_communication_per_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = root().join("tests/scenes/mpi_grains_box.toml");
+    let scene = scene.to_str().unwrap();
+    let (one, two) = (dir.path().join("one"), dir.path().join("two"));
+    run_ok(1, scene, &one, &["--steps", "100"]);
+    run_ok(2, scene, &two, &["--steps", "100"]);
+    let (a, b) = (summary(&one), summary(&two));
+    let f = |s: &serde_json::Value, k: &str| s[k].as_f64().unwrap_or_else(|| panic!("no {k}"));
+    for k in [
+        "message_bytes_per_step",
+        "messages_per_step",
+        "collectives_per_step",
+    ] {
+        assert_eq!(f(&a, k), 0.0, "one process: {k}");
+    }
+    let (bytes, halo) = (
+        f(&b, "message_bytes_per_step"),
+        f(&b, "halo_bytes_per_step"),
+    );
+    assert!(
+        halo > 0.0 && bytes > halo,
+        "{bytes} B per step, {halo} of them halo"
+    );
+    assert!(f(&b, "messages_per_step") >= 2.0);
+    assert!(f(&b, "collectives_per_step") >= 1.0);
+    let out = std::process::Command::new("python3")
+        .arg(root().join("scripts/scaling-model"))
+        .args([&one, &two])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && text.contains("1024"), "{text}");
 }

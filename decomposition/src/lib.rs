@@ -20,6 +20,7 @@ mod mpi_comm;
 mod neighbours;
 mod pack;
 mod slab;
+mod traffic;
 
 pub use comm::{ordered_sum, Comm, Incoming, Outgoing, SingleProcess};
 pub use exact_sum::reproducible_sums;
@@ -28,3 +29,4 @@ pub use mpi_comm::{launched_by_mpi, MpiComm, RawComm};
 pub use neighbours::{swap_neighbours, swap_neighbours_varlen};
 pub use pack::{pack_rows, pack_words, unpack_rows, unpack_words, PackRows, Record, Word};
 pub use slab::{PartitionError, Slab, SlabPartition};
+pub use traffic::Traffic;

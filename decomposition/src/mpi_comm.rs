@@ -100,6 +100,7 @@ impl Comm for MpiComm {
         self.size
     }
     fn all_gather_f64(&self, local: &[f64]) -> Vec<f64> {
+        crate::traffic::count_collective(1);
         let (counts, displs, total) = self.counts(local.len());
         let mut out = vec![0.0; total];
         let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
@@ -107,6 +108,7 @@ impl Comm for MpiComm {
         out
     }
     fn all_gather_bytes(&self, local: &[u8]) -> Vec<u8> {
+        crate::traffic::count_collective(1);
         let (counts, displs, total) = self.counts(local.len());
         let mut out = vec![0u8; total];
         let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
@@ -116,6 +118,7 @@ impl Comm for MpiComm {
     /// Two `MPI_Gather`s to rank 0 (the counts, then the values): the other ranks keep
     /// nothing of the result.
     fn gather_f64(&self, local: &[f64]) -> Vec<f64> {
+        crate::traffic::count_collective(2);
         let root = self.world.process_at_rank(0);
         let n = local.len() as Count;
         if self.rank != 0 {
@@ -132,11 +135,13 @@ impl Comm for MpiComm {
         out
     }
     fn barrier(&self) {
+        crate::traffic::count_collective(1);
         self.world.barrier();
     }
     /// One `MPI_Allreduce(MAX)`: called every step (instability and signal agreement), so
     /// it avoids the two collectives of the gather-based default. Max is order-independent.
     fn max_f64(&self, value: f64) -> f64 {
+        crate::traffic::count_collective(1);
         // MPI's MAX is undefined for NaN: carry "some rank has NaN" as a second value.
         let send = if value.is_nan() {
             [f64::NEG_INFINITY, 1.0]
@@ -158,6 +163,8 @@ impl Comm for MpiComm {
         recvs: &mut [Incoming<'_>],
         overlap: &mut dyn FnMut(),
     ) -> f64 {
+        let away = sends.iter().filter(|s| s.peer != self.rank);
+        crate::traffic::count_sent(away.clone().count(), away.map(|s| s.data.len()).sum());
         mpi::request::scope(|scope| {
             // Receives first, so that eager messages land directly in their buffers.
             let rreq: Vec<_> = recvs
