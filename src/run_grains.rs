@@ -79,7 +79,7 @@ pub struct GrainStepper<'a> {
     picture: io::figure::PictureStyle,
     /// Wall and floor of a column-collapse analysis.
     collapse_at: Option<(f64, f64)>,
-    /// (t, deposit length, kinetic energy) every 1000 steps of a collapse that did not
+    /// (t, deposit length, kinetic energy) every `FRONT_EVERY_STEPS` steps of a collapse that did not
     /// restart (s, m, J/m).
     fronts: Vec<(f64, f64, f64)>,
     start_step: u64,
@@ -159,15 +159,18 @@ impl Stepper for GrainStepper<'_> {
     }
 }
 
+/// How often a grains run with a collapse analysis records its front (steps).
+const FRONT_EVERY_STEPS: u64 = 200;
+
 impl GrainStepper<'_> {
-    /// The deposit's front every 1000 steps (column collapses, for the time it reaches
+    /// The deposit's front every [`FRONT_EVERY_STEPS`] steps (column collapses, for the time it reaches
     /// 95 % of its run-out); every 100 steps and at the last, a finite kinetic energy and
     /// the scene's early stop once the grains are at rest.
     fn health(&mut self, comm: &dyn Comm, due: Due) -> Flow {
         let step = due.step;
         if let (Some((wx, fy)), true) = (
             self.collapse_at,
-            step.is_multiple_of(1000) && self.start_step == 0,
+            step.is_multiple_of(FRONT_EVERY_STEPS) && self.start_step == 0,
         ) {
             let g = gather_grains(&self.d.system, comm);
             let length = pile_shape(&g.x, &g.y, &g.r, wx, fy).length_m;
@@ -229,7 +232,7 @@ pub fn run_grains(
     );
     // The packing before its settling trim holds more grains than the run: the scene's
     // estimate, as `check` gives it, bounds the peak.
-    let held = scene.estimated_grains().unwrap_or(0.0).max(grains as f64);
+    let held = scene.estimated_grains().unwrap_or(grains as f64);
     let cost =
         crate::budget::grain_cost(held, last_step.saturating_sub(d.system.steps), comm.size());
     crate::budget::admit(cost, comm, opts.force)?;

@@ -139,8 +139,7 @@ pub struct LoopEnd {
     pub next_output_s: f64,
     /// The plan's [`LoopPlan::shortened`].
     pub shortened: bool,
-    /// What this rank sent through the loop's steps and their snapshots (not the final
-    /// snapshot and checkpoint).
+    /// What this rank sent through the loop's steps, its snapshots and checkpoints left out.
     pub traffic: decomposition::Traffic,
 }
 
@@ -181,6 +180,8 @@ pub fn drive(
         traffic: decomposition::Traffic::default(),
     };
     let traffic_at_start = decomposition::Traffic::now();
+    // What the snapshots and checkpoints sent, left out of the steps' traffic.
+    let mut output_traffic = decomposition::Traffic::default();
     let mut checkpoint_at = None;
     let mut last_checkpoint = Instant::now();
     let started = Instant::now();
@@ -216,13 +217,17 @@ pub fn drive(
                     end.next_output_s += every;
                 }
             }
+            let sent = decomposition::Traffic::now();
             stepper.snapshot(comm)?;
+            output_traffic = output_traffic.plus(decomposition::Traffic::now().since(sent));
             snapshot_at = Some(step);
             clock.add("output", t);
         }
         if due.checkpoint {
             let t = Instant::now();
+            let sent = decomposition::Traffic::now();
             stepper.checkpoint(comm, &plan.checkpoint_path, end.next_output_s)?;
+            output_traffic = output_traffic.plus(decomposition::Traffic::now().since(sent));
             end.checkpoints.push(plan.checkpoint_path.clone());
             checkpoint_at = Some(step);
             last_checkpoint = Instant::now();
@@ -235,7 +240,9 @@ pub fn drive(
         }
     }
     end.wall_s = started.elapsed().as_secs_f64();
-    end.traffic = decomposition::Traffic::now().since(traffic_at_start);
+    end.traffic = decomposition::Traffic::now()
+        .since(traffic_at_start)
+        .since(output_traffic);
     progress.finish();
     finish(
         stepper,

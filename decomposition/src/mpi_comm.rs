@@ -65,6 +65,14 @@ impl MpiComm {
         })
     }
 
+    /// Count `calls` MPI collectives for [`crate::Traffic`] (none on one rank: it talks to
+    /// no one).
+    fn count_collectives(&self, calls: u64) {
+        if self.size > 1 {
+            crate::traffic::count_collective(calls);
+        }
+    }
+
     fn counts(&self, n: usize) -> (Vec<Count>, Vec<Count>, usize) {
         let mut counts = vec![0 as Count; self.size];
         self.world.all_gather_into(&(n as Count), &mut counts[..]);
@@ -100,7 +108,7 @@ impl Comm for MpiComm {
         self.size
     }
     fn all_gather_f64(&self, local: &[f64]) -> Vec<f64> {
-        crate::traffic::count_collective(1);
+        self.count_collectives(2);
         let (counts, displs, total) = self.counts(local.len());
         let mut out = vec![0.0; total];
         let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
@@ -108,7 +116,7 @@ impl Comm for MpiComm {
         out
     }
     fn all_gather_bytes(&self, local: &[u8]) -> Vec<u8> {
-        crate::traffic::count_collective(1);
+        self.count_collectives(2);
         let (counts, displs, total) = self.counts(local.len());
         let mut out = vec![0u8; total];
         let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
@@ -118,7 +126,7 @@ impl Comm for MpiComm {
     /// Two `MPI_Gather`s to rank 0 (the counts, then the values): the other ranks keep
     /// nothing of the result.
     fn gather_f64(&self, local: &[f64]) -> Vec<f64> {
-        crate::traffic::count_collective(2);
+        self.count_collectives(2);
         let root = self.world.process_at_rank(0);
         let n = local.len() as Count;
         if self.rank != 0 {
@@ -135,13 +143,13 @@ impl Comm for MpiComm {
         out
     }
     fn barrier(&self) {
-        crate::traffic::count_collective(1);
+        self.count_collectives(1);
         self.world.barrier();
     }
     /// One `MPI_Allreduce(MAX)`: called every step (instability and signal agreement), so
     /// it avoids the two collectives of the gather-based default. Max is order-independent.
     fn max_f64(&self, value: f64) -> f64 {
-        crate::traffic::count_collective(1);
+        self.count_collectives(1);
         // MPI's MAX is undefined for NaN: carry "some rank has NaN" as a second value.
         let send = if value.is_nan() {
             [f64::NEG_INFINITY, 1.0]

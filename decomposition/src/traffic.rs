@@ -30,6 +30,15 @@ impl Traffic {
         }
     }
 
+    /// Both counts added.
+    pub fn plus(self, other: Traffic) -> Traffic {
+        Traffic {
+            sent_bytes: self.sent_bytes + other.sent_bytes,
+            messages: self.messages + other.messages,
+            collectives: self.collectives + other.collectives,
+        }
+    }
+
     /// What was sent between `earlier` and `self`.
     pub fn since(self, earlier: Traffic) -> Traffic {
         Traffic {

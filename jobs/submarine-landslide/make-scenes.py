@@ -17,7 +17,8 @@ submerged scene has a dry twin with the same grains, packing and walls.
 
 Sizes:
   small   a few hundred grains, runs in CI (under a minute);
-  medium  >= 10 000 grains, runs to rest in <= 30 min on 2 cores: the validation size;
+  medium  about 10 600 grains on 2720 x 610 cells: the validation size (over an hour to
+          rest on 2 cores at about 20 MLUPS);
   large   >= 200 000 grains and >= 50 M fluid cells, packed without settling (the packing
           alone would take hours): it must start, run 500 steps on 2 ranks, checkpoint and
           restart; written only with --large.

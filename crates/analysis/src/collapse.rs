@@ -92,8 +92,8 @@ pub use scene::collapse_names::{QUANTITIES, THICK_QUANTITIES};
 /// When the front moved and how fast, from its position `fronts` (m from the wall) at
 /// `times` (s, from the release): `[t₁₀, t₉₅, speed]`, the first times the front passed
 /// 10 % and 95 % of its run-out from `li` to `lf` (s; NaN when it never did) and its mean
-/// speed between them, 0.85 (lf − li)/(t₉₅ − t₁₀) (m/s). A mass that does not move
-/// (lf ≤ li) has NaN times and speed 0.
+/// speed between them, 0.85 (lf − li)/(t₉₅ − t₁₀) (m/s; NaN when the series does not
+/// resolve the two apart). A mass that does not move (lf ≤ li) has NaN times and speed 0.
 pub fn front_timing(times: &[f64], fronts: &[f64], li: f64, lf: f64) -> [f64; 3] {
     if !(lf > li) {
         return [f64::NAN, f64::NAN, 0.0];
@@ -106,7 +106,12 @@ pub fn front_timing(times: &[f64], fronts: &[f64], li: f64, lf: f64) -> [f64; 3]
             .map_or(f64::NAN, |j| times[j])
     };
     let (t10, t95) = (at(0.10), at(0.95));
-    [t10, t95, 0.85 * (lf - li) / (t95 - t10)]
+    let speed = if t95 > t10 {
+        0.85 * (lf - li) / (t95 - t10)
+    } else {
+        f64::NAN
+    };
+    [t10, t95, speed]
 }
 
 /// The collapse results, in the order of [`QUANTITIES`], from the column `before` and the
@@ -170,7 +175,14 @@ pub fn submerged(
     let fronts: Vec<f64> = (0..series.len())
         .map(|j| series.values[j * series.columns.len()])
         .collect();
-    let [t10, t95, speed] = front_timing(&series.times, &fronts, before.length_m, after.length_m);
+    // Times from the release: the last wall removed.
+    let release = spec
+        .walls
+        .iter()
+        .filter_map(|w| w.remove_at_s)
+        .fold(0.0, f64::max);
+    let times: Vec<f64> = series.times.iter().map(|t| t - release).collect();
+    let [t10, t95, speed] = front_timing(&times, &fronts, before.length_m, after.length_m);
     let values = collapse_results(before, after, g, t95);
     for (k, v) in QUANTITIES.iter().zip(values) {
         r.insert(format!("collapse.{k}"), v);

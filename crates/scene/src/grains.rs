@@ -251,7 +251,7 @@ pub enum GrainAnalysis {
     /// `collapse.aspect_ratio` = H_i/L_i, `collapse.front_m`, `collapse.height_m`,
     /// `collapse.stop_time` (t/τ_c with τ_c = √(H_i/g), when motion stopped),
     /// `collapse.front_t10` and `collapse.front_t95` (t/τ_c when the front first passed
-    /// 10 % and 95 % of its run-out, sampled every 1000 steps), `collapse.front_speed_m_s`
+    /// 10 % and 95 % of its run-out, sampled every 200 steps), `collapse.front_speed_m_s`
     /// (its mean speed between the two),
     /// `collapse.dem_law_ratio` and `collapse.experiment_ratio` (run-out over the published
     /// 2-D DEM law and over the experiments' law at the measured a).

@@ -79,8 +79,6 @@ fn contact_model(c: &ContactSpec) -> ContactModel {
     }
 }
 
-/// Grains a packed rectangle will hold: its area times the solid fraction over the mean of
-/// the smallest and largest disk's area (within a factor of 2 for these distributions).
 /// About how many grains `sample` holds: listed ones, or a packed rectangle's share
 /// (area × solid fraction over the mean of the extreme disks' areas, before any settling
 /// trim); `None` for a CSV file, whose grains are read at run time.
@@ -98,6 +96,8 @@ pub fn estimated_grains(sample: &SampleSpec) -> Option<f64> {
     }
 }
 
+/// Grains a packed rectangle will hold: its area times the solid fraction over the mean of
+/// the smallest and largest disk's area (within a factor of 2 for these distributions).
 fn packed_grains(min_m: [f64; 2], max_m: [f64; 2], sizes: &SizeSpec, solid_fraction: f64) -> f64 {
     let d = size_distribution(sizes);
     let (r0, r1) = (d.min_radius(), d.max_radius());
