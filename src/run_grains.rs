@@ -79,8 +79,8 @@ pub struct GrainStepper<'a> {
     picture: io::figure::PictureStyle,
     /// Wall and floor of a column-collapse analysis.
     collapse_at: Option<(f64, f64)>,
-    /// (t, deposit length, kinetic energy) every `FRONT_EVERY_STEPS` steps of a collapse that did not
-    /// restart (s, m, J/m).
+    /// (t, deposit length, kinetic energy) every [`FRONT_EVERY_STEPS`] steps of a collapse
+    /// that did not restart (s, m, J/m).
     fronts: Vec<(f64, f64, f64)>,
     start_step: u64,
     settle_steps: u64,
@@ -159,28 +159,29 @@ impl Stepper for GrainStepper<'_> {
     }
 }
 
-/// How often a grains run with a collapse analysis records its front (steps).
+/// How often a grains run with a collapse analysis records its front (steps; a multiple of
+/// the 100 of the health check).
 const FRONT_EVERY_STEPS: u64 = 200;
 
 impl GrainStepper<'_> {
-    /// The deposit's front every [`FRONT_EVERY_STEPS`] steps (column collapses, for the time it reaches
-    /// 95 % of its run-out); every 100 steps and at the last, a finite kinetic energy and
-    /// the scene's early stop once the grains are at rest.
+    /// Every 100 steps and at the last, a finite kinetic energy and the scene's early stop
+    /// once the grains are at rest; every [`FRONT_EVERY_STEPS`] steps of a column collapse
+    /// (a multiple of 100), the deposit's front and that energy for `front.csv` and the
+    /// front's timing.
     fn health(&mut self, comm: &dyn Comm, due: Due) -> Flow {
         let step = due.step;
+        if !step.is_multiple_of(100) && !due.last {
+            return Flow::Go;
+        }
+        let (ke, _, _) = global_state(&self.d, comm);
         if let (Some((wx, fy)), true) = (
             self.collapse_at,
             step.is_multiple_of(FRONT_EVERY_STEPS) && self.start_step == 0,
         ) {
             let g = gather_grains(&self.d.system, comm);
             let length = pile_shape(&g.x, &g.y, &g.r, wx, fy).length_m;
-            let (ke, _, _) = global_state(&self.d, comm);
             self.fronts.push((self.d.system.time, length, ke));
         }
-        if !step.is_multiple_of(100) && !due.last {
-            return Flow::Go;
-        }
-        let (ke, _, _) = global_state(&self.d, comm);
         if !ke.is_finite() {
             return Flow::Unstable(format!(
                 "the grains' kinetic energy is not finite at step {step} (t = {:.6e} s): \
