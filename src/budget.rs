@@ -131,6 +131,9 @@ pub const GRAIN_BYTES: f64 = 560.0;
 /// (its views, hand-over loads, carried forces and covered-cell lists), as the peak
 /// resident memory of the 209 000-grain landslide measured it.
 pub const COUPLED_GRAIN_BYTES: f64 = 1024.0;
+/// Bytes per grain that every rank holds while a coupled run rebalances: the grains'
+/// state gathered from all ranks (22 words) and their contacts' history.
+pub const GATHERED_GRAIN_BYTES: f64 = 256.0;
 /// Bytes per material point: its 25 words, the step's working arrays (next positions,
 /// gradients, the sorting scratch), the scene's generated copy and a snapshot's
 /// conversions, as the peak resident memory of 0.6 and 1.3 million-point runs measured it.
@@ -150,16 +153,26 @@ pub fn fluid_cost(
 ) -> Cost {
     let buffers = if in_place { 1.0 } else { 2.0 };
     let grains = scene.scene.grains.as_ref();
+    let rebalances = scene
+        .scene
+        .coupling
+        .as_ref()
+        .is_some_and(|c| grains.is_some() && ranks > 1 && c.rebalance_every_steps() > 0);
+    let per_grain =
+        COUPLED_GRAIN_BYTES + f64::from(u8::from(rebalances)) * ranks as f64 * GATHERED_GRAIN_BYTES;
     let grain_bytes = grains
         .and_then(|g| scene::estimated_grains(&g.sample))
-        .map_or(0.0, |n| n * COUPLED_GRAIN_BYTES);
+        .map_or(0.0, |n| n * per_grain);
+    // A snapshot and a rebalance (one more copy of the populations while they move) are
+    // never taken together.
+    let moving = f64::from(u8::from(rebalances)) * 9.0 * bytes;
     Cost {
         steps,
         memory_bytes: fluid_bytes(
             scene.scene.domain.cells,
             buffers,
             bytes,
-            snapshot_bytes_per_cell(&scene.scene.output, ranks),
+            snapshot_bytes_per_cell(&scene.scene.output, ranks).max(moving),
         ) + grain_bytes
             + processes(ranks),
     }

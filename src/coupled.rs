@@ -52,7 +52,7 @@ pub fn lbm_dem<T: Real>(
             (g, None, settle_steps > 0)
         }
     };
-    check_grains(&grains, domain, units.dx_m).map_err(|(k, m)| scene.invalid(k, m))?;
+    check_grains(&grains, domain, units.dx_m, settled).map_err(|(k, m)| scene.invalid(k, m))?;
     let substeps = substeps_for(c, &gs, &grains, units.dt_s);
     let setup = LbmDemSetup {
         scheme: c.scheme,

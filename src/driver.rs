@@ -87,6 +87,10 @@ pub struct RunHeader {
     /// Collective calls per step of the loop (reductions, gathers, barriers; snapshots'
     /// gathers included), the busiest rank's; 0 on one process.
     pub collectives_per_step: f64,
+    /// Seconds each rank spent in communication over the loop's steps (in collectives and
+    /// waiting for messages; 0 on one rank): the least and the most over the ranks. The
+    /// most minus the least is roughly what load imbalance costs.
+    pub communication_wait_s: [f64; 2],
     /// The memory `check` estimates for the run, all ranks together (bytes).
     pub memory_estimate_bytes: f64,
     /// The peak resident memory of each rank's process (its high-water mark at the end of
@@ -146,6 +150,7 @@ impl RunHeader {
             message_bytes_per_step: 0.0,
             messages_per_step: 0.0,
             collectives_per_step: 0.0,
+            communication_wait_s: [0.0; 2],
             memory_estimate_bytes: f64::NAN,
             peak_memory_bytes: None,
             checkpoints: Vec::new(),
@@ -211,6 +216,8 @@ impl RunHeader {
         self.message_bytes_per_step = bytes[0] / steps;
         self.messages_per_step = comm.max_f64(traffic.messages as f64) / steps;
         self.collectives_per_step = comm.max_f64(traffic.collectives as f64) / steps;
+        let wait = traffic.wait_seconds();
+        self.communication_wait_s = [-comm.max_f64(-wait), comm.max_f64(wait)];
     }
 
     /// Fill in the stage timings from each rank's `clocks` (the solver's and the time

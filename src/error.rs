@@ -32,4 +32,7 @@ pub enum RunError {
     /// SIGTERM arrived before the first step (while the sample settled).
     #[error("{0}")]
     Interrupted(String),
+    /// A check of the solver's own bookkeeping failed (a bug, not the scene's fault).
+    #[error("{0}")]
+    Internal(String),
 }

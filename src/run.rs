@@ -2,7 +2,7 @@
 
 use crate::driver::StageClock;
 use crate::progress::Progress;
-use crate::simulation::{stage, Simulation, STAGES};
+use crate::simulation::{stage, Balancer, Simulation, STAGES};
 use crate::time_loop::{drive, Due, Flow, LoopEnd, LoopPlan, Stepper};
 use analysis::checks::evaluate;
 use analysis::{self, Results};
@@ -92,6 +92,11 @@ pub struct Summary {
     /// rescanned). Absent without grains.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub coupling_counts: BTreeMap<&'static str, u64>,
+    /// Coupled runs on several ranks: times the slabs moved to follow the work, and the
+    /// busiest rank's own work over the mean at the last check (1 when never checked).
+    pub rebalances: u64,
+    /// See `rebalances`.
+    pub load_imbalance: f64,
     /// HDF5 snapshot data written (bytes, all ranks) and the slowest rank's seconds in
     /// the HDF5 write calls: their ratio is the parallel write bandwidth.
     pub snapshot_bytes: u64,
@@ -179,6 +184,8 @@ struct FluidStepper<'a, T: Real + hdf5::H5Type> {
     grains_initial: Vec<[f64; 3]>,
     /// `check`'s memory estimate for the run, all ranks (bytes).
     memory_estimate: f64,
+    /// The load balance of a coupled run on several ranks.
+    balance: Option<Balancer>,
 }
 
 impl<T: Real + hdf5::H5Type> Stepper for FluidStepper<'_, T> {
@@ -270,6 +277,23 @@ impl<T: Real + hdf5::H5Type> Stepper for FluidStepper<'_, T> {
                 io::coupled_checkpoint::write(path, comm, &lat, &state, &grains)?
             }
         }
+        Ok(())
+    }
+
+    fn rebalance(&mut self, comm: &dyn Comm, due: Due) -> Result<(), RunError> {
+        let Some(b) = &mut self.balance else {
+            return Ok(());
+        };
+        if !b.due(due.step) {
+            return Ok(());
+        }
+        if let Some(p) = b.plan(&self.sim, comm) {
+            b.rebalances += 1;
+            self.sim.repartition(self.scene, p, comm)?;
+            let lat = self.sim.fluid.lattice();
+            self.out.set_block(lat.x_offset(), lat.nx());
+        }
+        b.restart_window(&self.sim);
         Ok(())
     }
 }
@@ -442,6 +466,7 @@ fn run_typed<T: Real + hdf5::H5Type>(
         momentum_initial,
         grains_initial,
         memory_estimate: cost.memory_bytes,
+        balance: Balancer::new(scene, comm.size(), start_step),
     };
     if start_step == 0 {
         stepper.sim.record_probes(comm);
@@ -656,6 +681,8 @@ fn summarise<T: Real + hdf5::H5Type>(
         kernel_mlups: updates / kernel_s.max(1e-12) / 1e6,
         coupling_pass_seconds,
         coupling_counts,
+        rebalances: st.balance.as_ref().map_or(0, |b| b.rebalances),
+        load_imbalance: st.balance.as_ref().map_or(1.0, |b| b.last_imbalance),
         snapshot_bytes: st.out.bytes,
         snapshot_write_s: comm.max_f64(st.out.write_s),
         totals_initial: st.totals_initial,

@@ -18,7 +18,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod probes;
+mod rebalance;
 use probes::{check_grain_probes, probe_targets, ProbeTarget};
+pub use rebalance::Balancer;
 
 /// A curved-wall cell that went bad on any rank (`bad` on this one: its plan index and
 /// density), as the fluid's error naming it, the same on every rank; the step is `step`
@@ -88,6 +90,9 @@ pub mod stage {
 pub struct StageTimes {
     /// Seconds per entry of [`STAGES`].
     pub seconds: [f64; STAGES.len()],
+    /// Seconds of the steps spent in communication (collectives and waiting for messages,
+    /// inside the stages): what the load balance takes away to find each rank's own work.
+    pub waited: f64,
 }
 
 impl StageTimes {
@@ -135,23 +140,31 @@ pub struct Simulation<T: Real> {
     /// Circular obstacles with curved walls (interpolated bounce-back), when the scene has
     /// them (scenes without grains only).
     curved: Option<CurvedWalls>,
+    /// Fluid cells of each global column (the load-balance cost of the fluid).
+    column_fluid: Vec<f64>,
+    /// The backend, GPU storage and kernel the run chose (a rebalance builds on them).
+    devices: (Backend, GpuStorage, Kernel),
+}
+
+/// Fluid cells of each global column.
+fn fluid_per_column(built: &BuiltGeometry) -> Vec<f64> {
+    let (gnx, ny) = (built.setup.nx, built.setup.ny);
+    (0..gnx)
+        .map(|x| {
+            (0..ny)
+                .filter(|&y| built.setup.cells[y * gnx + x] == 0)
+                .count() as f64
+        })
+        .collect()
 }
 
 /// Columns split over the ranks of `comm` by fluid-cell count.
 fn partition_by_fluid(
     scene: &ValidScene,
-    built: &BuiltGeometry,
+    column_fluid: &[f64],
     comm: &dyn Comm,
 ) -> Result<SlabPartition, RunError> {
-    let (gnx, ny) = (built.setup.nx, built.setup.ny);
-    let costs: Vec<f64> = (0..gnx)
-        .map(|x| {
-            let fluid = (0..ny)
-                .filter(|&y| built.setup.cells[y * gnx + x] == 0)
-                .count();
-            fluid.max(1) as f64
-        })
-        .collect();
+    let costs: Vec<f64> = column_fluid.iter().map(|&n| n.max(1.0)).collect();
     SlabPartition::weighted(&costs, comm.size()).map_err(|e| {
         scene
             .invalid(
@@ -232,12 +245,28 @@ impl<T: Real> Simulation<T> {
         kernel: Kernel,
         restored: Option<coupling::RestoredCoupling>,
     ) -> Result<Self, RunError> {
+        Self::on_slabs(scene, comm, (backend, storage, kernel), restored, None)
+    }
+
+    /// [`Simulation::new`] on the slabs of `partition` (by fluid-cell count when `None`).
+    fn on_slabs(
+        scene: &ValidScene,
+        comm: &dyn Comm,
+        devices: (Backend, GpuStorage, Kernel),
+        restored: Option<coupling::RestoredCoupling>,
+        partition: Option<SlabPartition>,
+    ) -> Result<Self, RunError> {
+        let (backend, storage, kernel) = devices;
         let built = build_lattice(scene)?;
         let units = scene.units;
         let invalid = |key: &str, message: String| scene.invalid(key, message);
         let (targets, series) = probe_targets(scene, &built)?;
         let ny = built.setup.ny;
-        let partition = partition_by_fluid(scene, &built, comm)?;
+        let column_fluid = fluid_per_column(&built);
+        let partition = match partition {
+            Some(p) => p,
+            None => partition_by_fluid(scene, &column_fluid, comm)?,
+        };
         // A lattice that goes in place below never needs the two-array kernel's second buffer.
         let goes_in_place =
             backend == Backend::Cpu && in_place(kernel, scene.scene.grains.is_some());
@@ -293,6 +322,8 @@ impl<T: Real> Simulation<T> {
         let curved = (!built.curved.is_empty() && grains.is_none())
             .then(|| CurvedWalls::new(fluid.lattice(), &built.curved));
         let mut sim = Self {
+            column_fluid,
+            devices,
             curved,
             probe_on_rank_face,
             fluid,
@@ -333,6 +364,14 @@ impl<T: Real> Simulation<T> {
     /// the halo exchange overlapped with the inner cells), then the local halo boundaries.
     /// Probes and output are driven by the caller. Collective.
     pub fn step(&mut self, comm: &dyn Comm) -> Result<(), StepFailure> {
+        let before = decomposition::Traffic::now();
+        let r = self.stages(comm);
+        self.times.waited += decomposition::Traffic::now().since(before).wait_seconds();
+        r
+    }
+
+    /// The stages of [`Simulation::step`].
+    fn stages(&mut self, comm: &dyn Comm) -> Result<(), StepFailure> {
         let lat = &mut self.fluid;
         if let Some(c) = &mut self.grains {
             self.times.time(stage::COUPLING, || c.plan(lat.as_ref()));

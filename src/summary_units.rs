@@ -9,7 +9,7 @@ use serde_json::{Map, Value};
 
 /// Units of the summary keys without a unit suffix (a dotted path; `*.` before it: any
 /// section's key; `.*` after it: any key of that section).
-const KEY_UNITS: [(&str, &str); 37] = [
+const KEY_UNITS: [(&str, &str); 38] = [
     ("coupling_counts.*", "count"),
     ("coupling_pass_seconds.*", "s"),
     ("ranks", "count"),
@@ -27,6 +27,10 @@ const KEY_UNITS: [(&str, &str); 37] = [
     ("snapshots", "count"),
     ("migrated", "count"),
     ("rebalances", "count"),
+    (
+        "load_imbalance",
+        "1 (the busiest rank's own work over the mean, at the last load-balance check)",
+    ),
     ("contacts", "count"),
     ("list_rebuilds", "count"),
     ("grains", "count"),

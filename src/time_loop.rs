@@ -1,5 +1,6 @@
 //! The one time loop every solver runs: advance a step, then the after-step hooks in a
-//! fixed order (signals, the solver's own observations, snapshot, checkpoint, progress),
+//! fixed order (signals, the solver's own observations, snapshot, checkpoint, load
+//! balance, progress),
 //! and at the end the final snapshot and checkpoint. Fluid, coupled, grain and MPM runs
 //! differ only in their [`Stepper`].
 
@@ -57,6 +58,11 @@ pub trait Stepper {
         path: &std::path::Path,
         next_output_s: f64,
     ) -> Result<(), RunError>;
+    /// After the output hooks: spread the work over the ranks again if the solver balances
+    /// its own load here (a coupled run's slabs follow its grains). Nothing by default.
+    fn rebalance(&mut self, _comm: &dyn Comm, _due: Due) -> Result<(), RunError> {
+        Ok(())
+    }
 }
 
 /// How long and with what cadences a run goes.
@@ -144,7 +150,7 @@ pub struct LoopEnd {
 }
 
 /// The stages the loop times itself; each solver times its own.
-pub const LOOP_STAGES: [&str; 2] = ["output", "checkpoint"];
+pub const LOOP_STAGES: [&str; 3] = ["output", "checkpoint", "rebalance"];
 
 /// Run `stepper` to `plan.last_step` (collective). Writes the first snapshot (not on a
 /// restart), snapshots at the cadence, checkpoints when due or asked for by a signal, and
@@ -232,6 +238,11 @@ pub fn drive(
             checkpoint_at = Some(step);
             last_checkpoint = Instant::now();
             clock.add("checkpoint", t);
+        }
+        if !due.last {
+            let t = Instant::now();
+            stepper.rebalance(comm, due)?;
+            clock.add("rebalance", t);
         }
         progress.update(step);
         if agreed.stop {

@@ -177,6 +177,43 @@ fn coupled_restart_on_another_rank_count_continues_bit_identically() {
 }
 
 #[test]
+fn rebalanced_coupled_runs_are_bit_identical_to_1_rank() {
+    // Twelve grains slide from the left of a tank to the right under tilted gravity; every
+    // 50 steps the slabs follow the measured work (tolerance 0: whenever the model finds a
+    // better split), moving populations and grains between ranks.
+    let d = tempfile::tempdir().unwrap();
+    for scheme in ["bounce-back", "psm"] {
+        let scene = with_scheme("tests/scenes/mpi_grains_rebalance.toml", scheme, d.path());
+        let one = d.path().join(format!("{scheme}-np1"));
+        run_ok(1, &scene, &one, &[]);
+        assert_eq!(
+            summary(&one)["rebalances"],
+            0,
+            "one rank has nothing to balance"
+        );
+        for n in [2, 3] {
+            let many = d.path().join(format!("{scheme}-np{n}"));
+            run_ok(n, &scene, &many, &[]);
+            let s = summary(&many);
+            let moved = s["rebalances"].as_u64().unwrap();
+            assert!(moved > 0, "{scheme} on {n} ranks never rebalanced");
+            assert_bit_identical(&one, &many);
+            assert_grains_identical(&one, &many);
+            eprintln!("{scheme}: {n} ranks, {moved} rebalances, match 1 rank bit for bit");
+        }
+        // A checkpoint of a rebalanced run restarts on another rank count bit for bit.
+        let split = d.path().join(format!("{scheme}-split"));
+        run_ok(3, &scene, &split, &["--steps", "400"]);
+        assert!(summary(&split)["rebalances"].as_u64().unwrap() > 0);
+        let ck = split.join("checkpoint.h5");
+        run_ok(2, &scene, &split, &["--restart", ck.to_str().unwrap()]);
+        assert_eq!(summary(&split)["restarted_from_step"], 400);
+        assert_bit_identical(&one, &split);
+        assert_grains_identical(&one, &split);
+    }
+}
+
+#[test]
 fn coupled_checkpoints_are_refused_by_the_wrong_scene() {
     let d = tempfile::tempdir().unwrap();
     let coupled = d.path().join("coupled");
@@ -238,13 +275,19 @@ fn coupled_gpu_runs_on_2_ranks_match_1_gpu_rank() {
         ("mpi_grains_box", "bounce-back"),
         ("mpi_grains_box", "psm"),
         ("mpi_grains_periodic", "interpolated"),
+        // Slabs that move: each rebalance builds the device lattice on the new slab.
+        ("mpi_grains_rebalance", "psm"),
     ] {
+        let name = scene;
         let scene = with_scheme(&format!("tests/scenes/{scene}.toml"), scheme, d.path());
-        let one = d.path().join(format!("{scheme}-gpu1"));
+        let one = d.path().join(format!("{name}-{scheme}-gpu1"));
         run_ok(1, &scene, &one, &gpu);
-        let two = d.path().join(format!("{scheme}-gpu2"));
+        let two = d.path().join(format!("{name}-{scheme}-gpu2"));
         run_ok(2, &scene, &two, &gpu);
         assert!(summary(&two)["device"].as_str().unwrap().starts_with("gpu"));
+        if name == "mpi_grains_rebalance" {
+            assert!(summary(&two)["rebalances"].as_u64().unwrap() > 0);
+        }
         assert_bit_identical(&one, &two);
         assert_grains_identical(&one, &two);
         eprintln!("{scheme}: 2 GPU ranks match 1 GPU rank bit for bit");
@@ -281,6 +324,16 @@ fn runs_report_their_communication_per_step() {
     );
     assert!(f(&b, "messages_per_step") >= 2.0);
     assert!(f(&b, "collectives_per_step") >= 1.0);
+    // Time in communication: none on one process; on two, some, and no more than the loop.
+    let wait =
+        |s: &serde_json::Value| [0, 1].map(|k| s["communication_wait_s"][k].as_f64().unwrap());
+    assert_eq!(wait(&a), [0.0, 0.0]);
+    let [least, most] = wait(&b);
+    assert!(
+        least > 0.0 && least <= most && most < f(&b, "wall_time_s"),
+        "{least} .. {most} s of {} s",
+        f(&b, "wall_time_s")
+    );
     let out = std::process::Command::new("python3")
         .arg(root().join("scripts/scaling-model"))
         .args([&one, &two])

@@ -19,6 +19,7 @@ mod halo;
 mod mpi_comm;
 mod neighbours;
 mod pack;
+mod redistribute;
 mod slab;
 mod traffic;
 
@@ -28,5 +29,6 @@ pub use halo::{Side, SlabHalo};
 pub use mpi_comm::{launched_by_mpi, MpiComm, RawComm};
 pub use neighbours::{swap_neighbours, swap_neighbours_varlen};
 pub use pack::{pack_rows, pack_words, unpack_rows, unpack_words, PackRows, Record, Word};
+pub use redistribute::move_columns;
 pub use slab::{PartitionError, Slab, SlabPartition};
 pub use traffic::Traffic;

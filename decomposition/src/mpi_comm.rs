@@ -108,19 +108,23 @@ impl Comm for MpiComm {
         self.size
     }
     fn all_gather_f64(&self, local: &[f64]) -> Vec<f64> {
+        let t = Instant::now();
         self.count_collectives(2);
         let (counts, displs, total) = self.counts(local.len());
         let mut out = vec![0.0; total];
         let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
         self.world.all_gather_varcount_into(local, &mut part);
+        crate::traffic::count_wait(t.elapsed().as_secs_f64());
         out
     }
     fn all_gather_bytes(&self, local: &[u8]) -> Vec<u8> {
+        let t = Instant::now();
         self.count_collectives(2);
         let (counts, displs, total) = self.counts(local.len());
         let mut out = vec![0u8; total];
         let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
         self.world.all_gather_varcount_into(local, &mut part);
+        crate::traffic::count_wait(t.elapsed().as_secs_f64());
         out
     }
     /// Two `MPI_Gather`s to rank 0 (the counts, then the values): the other ranks keep
@@ -143,8 +147,10 @@ impl Comm for MpiComm {
         out
     }
     fn barrier(&self) {
+        let t = Instant::now();
         self.count_collectives(1);
         self.world.barrier();
+        crate::traffic::count_wait(t.elapsed().as_secs_f64());
     }
     /// One `MPI_Allreduce(MAX)`: called every step (instability and signal agreement), so
     /// it avoids the two collectives of the gather-based default. Max is order-independent.
@@ -157,8 +163,10 @@ impl Comm for MpiComm {
             [value, 0.0]
         };
         let mut out = [0.0; 2];
+        let t = Instant::now();
         self.world
             .all_reduce_into(&send[..], &mut out[..], SystemOperation::max());
+        crate::traffic::count_wait(t.elapsed().as_secs_f64());
         if out[1] > 0.0 {
             f64::NAN
         } else {
@@ -199,7 +207,9 @@ impl Comm for MpiComm {
             for s in sreq {
                 s.wait();
             }
-            t.elapsed().as_secs_f64()
+            let waited = t.elapsed().as_secs_f64();
+            crate::traffic::count_wait(waited);
+            waited
         })
     }
     fn raw_mpi(&self) -> Option<RawComm> {

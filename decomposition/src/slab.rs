@@ -18,6 +18,18 @@ pub enum PartitionError {
     /// The cost vector does not match the number of columns or holds a non-positive cost.
     #[error("column cost vector is invalid: {0}")]
     BadCosts(String),
+    /// Slabs of the least width asked for do not fit in the columns.
+    #[error(
+        "cannot split {columns} columns over {ranks} ranks of at least {min_width} columns each"
+    )]
+    TooNarrow {
+        /// Global columns.
+        columns: usize,
+        /// Ranks asked for.
+        ranks: usize,
+        /// The least width of a slab (columns).
+        min_width: usize,
+    },
 }
 
 /// One rank's slab: the half-open range of global columns `[x_begin, x_end)` it owns.
@@ -100,6 +112,44 @@ impl SlabPartition {
         Ok(Self { columns, slabs })
     }
 
+    /// [`SlabPartition::weighted`] with every slab at least `min_width` columns wide: the
+    /// cuts of the balanced partition move no further than that needs (a forward pass
+    /// pushes each cut right of its predecessor's plus `min_width`, a backward pass pulls
+    /// each left of its successor's minus `min_width`). Errors when `ranks × min_width`
+    /// exceeds the columns.
+    pub fn weighted_min_width(
+        costs: &[f64],
+        ranks: usize,
+        min_width: usize,
+    ) -> Result<Self, PartitionError> {
+        let columns = costs.len();
+        let min_width = min_width.max(1);
+        if ranks.saturating_mul(min_width) > columns {
+            return Err(PartitionError::TooNarrow {
+                columns,
+                ranks,
+                min_width,
+            });
+        }
+        let p = Self::weighted(costs, ranks)?;
+        let mut begins: Vec<usize> = p.slabs.iter().map(|s| s.x_begin).collect();
+        begins.push(columns);
+        for r in 1..ranks {
+            begins[r] = begins[r].max(begins[r - 1] + min_width);
+        }
+        for r in (1..ranks).rev() {
+            begins[r] = begins[r].min(begins[r + 1] - min_width);
+        }
+        let slabs = begins
+            .windows(2)
+            .map(|w| Slab {
+                x_begin: w[0],
+                x_end: w[1],
+            })
+            .collect();
+        Ok(Self { columns, slabs })
+    }
+
     /// Global number of columns.
     pub fn columns(&self) -> usize {
         self.columns
@@ -179,6 +229,33 @@ mod tests {
         let left: f64 = costs[..p.slab(0).x_end].iter().sum();
         let right: f64 = costs[p.slab(1).x_begin..].iter().sum();
         assert!((left - right).abs() <= 3.0, "{left} vs {right}");
+    }
+
+    #[test]
+    fn weighted_min_width_keeps_every_slab_wide_enough() {
+        // All the cost in the first ten columns: unconstrained, three slabs crowd there.
+        let costs: Vec<f64> = (0..100).map(|x| if x < 10 { 100.0 } else { 1.0 }).collect();
+        let free = SlabPartition::weighted(&costs, 4).unwrap();
+        assert!(free.slab(0).width() < 8, "{free:?}");
+        let p = SlabPartition::weighted_min_width(&costs, 4, 8).unwrap();
+        let mut next = 0;
+        for r in 0..4 {
+            let s = p.slab(r);
+            assert_eq!(s.x_begin, next);
+            assert!(s.width() >= 8, "{p:?}");
+            next = s.x_end;
+        }
+        assert_eq!(next, 100);
+        // Cuts the constraint does not touch stay where the balance put them.
+        assert_eq!(p.slab(3).x_begin, free.slab(3).x_begin.max(24));
+        assert_eq!(
+            SlabPartition::weighted_min_width(&costs, 4, 26),
+            Err(PartitionError::TooNarrow {
+                columns: 100,
+                ranks: 4,
+                min_width: 26
+            })
+        );
     }
 
     #[test]

@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 static SENT_BYTES: AtomicU64 = AtomicU64::new(0);
 static MESSAGES: AtomicU64 = AtomicU64::new(0);
 static COLLECTIVES: AtomicU64 = AtomicU64::new(0);
+static WAIT_NS: AtomicU64 = AtomicU64::new(0);
 
 /// Counts of this process's communication since it started.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -18,6 +19,9 @@ pub struct Traffic {
     pub messages: u64,
     /// Collective calls (all-gathers, gathers, reductions, barriers) this rank joined.
     pub collectives: u64,
+    /// Nanoseconds this rank spent inside collectives and waiting for messages (blocked on
+    /// the others, or moving data): its time not spent on its own work.
+    pub wait_ns: u64,
 }
 
 impl Traffic {
@@ -27,7 +31,13 @@ impl Traffic {
             sent_bytes: SENT_BYTES.load(Ordering::Relaxed),
             messages: MESSAGES.load(Ordering::Relaxed),
             collectives: COLLECTIVES.load(Ordering::Relaxed),
+            wait_ns: WAIT_NS.load(Ordering::Relaxed),
         }
+    }
+
+    /// Seconds spent in communication ([`Traffic::wait_ns`]).
+    pub fn wait_seconds(&self) -> f64 {
+        self.wait_ns as f64 * 1e-9
     }
 
     /// Both counts added.
@@ -36,6 +46,7 @@ impl Traffic {
             sent_bytes: self.sent_bytes + other.sent_bytes,
             messages: self.messages + other.messages,
             collectives: self.collectives + other.collectives,
+            wait_ns: self.wait_ns + other.wait_ns,
         }
     }
 
@@ -45,6 +56,7 @@ impl Traffic {
             sent_bytes: self.sent_bytes.saturating_sub(earlier.sent_bytes),
             messages: self.messages.saturating_sub(earlier.messages),
             collectives: self.collectives.saturating_sub(earlier.collectives),
+            wait_ns: self.wait_ns.saturating_sub(earlier.wait_ns),
         }
     }
 }
@@ -56,4 +68,8 @@ pub(crate) fn count_sent(messages: usize, bytes: usize) {
 
 pub(crate) fn count_collective(calls: u64) {
     COLLECTIVES.fetch_add(calls, Ordering::Relaxed);
+}
+
+pub(crate) fn count_wait(seconds: f64) {
+    WAIT_NS.fetch_add((seconds * 1e9) as u64, Ordering::Relaxed);
 }

@@ -71,6 +71,11 @@ impl Output {
         })
     }
 
+    /// This rank's block of the lattice from now on (after a load balance).
+    pub(super) fn set_block(&mut self, x0: usize, width: usize) {
+        self.h5.set_block(x0, width);
+    }
+
     /// Write this slab's fields `f` (lattice units) of `step` to HDF5 and, if enabled, the
     /// whole lattice as pictures (gathered on rank 0). Collective.
     pub(super) fn snapshot<T: Real>(

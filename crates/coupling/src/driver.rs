@@ -22,10 +22,12 @@ use lbm::{FluidBackend, Lattice, Real};
 use rayon::prelude::*;
 use thiserror::Error;
 
+mod handoff;
 mod report;
 mod repulsion;
 mod setup;
 
+pub use handoff::CouplingCounters;
 pub use setup::{check_grains, fluid_walls, MIN_CELLS_PER_DIAMETER};
 
 /// Where a grain in view comes from.
@@ -105,6 +107,10 @@ pub struct LbmDem {
     step: u64,
     /// Scratch for partial sums.
     partials: Vec<(u32, Load)>,
+    /// How far a grain reaches into its neighbours' cells (m): the narrowest slab.
+    reach_m: f64,
+    /// Counters of the couplings this one replaced (a rebalance).
+    earlier: CouplingCounters,
 }
 
 /// What the coupled grains are, in plain numbers: everything [`LbmDem::new`] takes besides
@@ -293,6 +299,8 @@ impl LbmDem {
             hydro_ratio: hydrodynamic_radius_ratio,
             step: lat.steps_done(),
             partials: Vec::new(),
+            reach_m: 2.0 * rmax + margin,
+            earlier: CouplingCounters::default(),
         };
         if !fresh {
             me.restore_per_grain(&per_grain);
@@ -326,12 +334,14 @@ impl LbmDem {
 
     /// Seconds this rank spent in each pass of the "coupling" stage ([`super::PASSES`]).
     pub fn pass_seconds(&self) -> [f64; 6] {
-        self.coupler.pass_seconds()
+        let now = self.coupler.pass_seconds();
+        std::array::from_fn(|k| self.earlier.passes[k] + now[k])
     }
 
     /// This rank's counts of [`super::COUNTS`] (see [`Coupler::counts`]).
     pub fn counts(&self) -> [u64; 6] {
-        self.coupler.counts()
+        let now = self.coupler.counts();
+        std::array::from_fn(|k| self.earlier.counts[k] + now[k])
     }
 
     /// The coupler (maps, loads).

@@ -39,7 +39,7 @@ pub mod sums;
 mod test_slabs;
 
 pub use driver::{
-    check_grains, fluid_walls, LbmDem, LbmDemSetup, RestoredCoupling, SetupError,
+    check_grains, fluid_walls, CouplingCounters, LbmDem, LbmDemSetup, RestoredCoupling, SetupError,
     MIN_CELLS_PER_DIAMETER,
 };
 

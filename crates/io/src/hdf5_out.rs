@@ -94,6 +94,13 @@ impl SnapshotWriter {
         Ok(w)
     }
 
+    /// This rank's block from now on (its slabs moved: a load balance): first global
+    /// column and width.
+    pub fn set_block(&mut self, x0: usize, width: usize) {
+        self.layout.x0 = x0;
+        self.layout.width = width;
+    }
+
     /// Record the snapshots kept on a restart (their time and fields).
     fn adopt_existing(&mut self, kept: Vec<(String, u64)>) -> hdf5::Result<()> {
         for (group, step) in kept {

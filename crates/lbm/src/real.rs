@@ -20,6 +20,7 @@ pub trait Real:
     + AddAssign
     + SubAssign
     + decomposition::Word
+    + bytemuck::Pod
     + 'static
 {
     /// Name used in reports ("f32"/"f64").

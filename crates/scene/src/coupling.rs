@@ -31,9 +31,37 @@ pub struct CouplingSpec {
     /// 2-D, disks in contact seal the packing). 1 (the grains as they are) by default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hydrodynamic_radius_ratio: Option<f64>,
+    /// On more than one rank: every this many steps, move the slab boundaries to follow
+    /// the measured work (fluid cells and the coupled grains over them) when the busiest
+    /// rank is more than `rebalance_tolerance` above the mean. 0: never. Default
+    /// [`DEFAULT_REBALANCE_EVERY_STEPS`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rebalance_every_steps: Option<u64>,
+    /// The imbalance tolerated before the slabs move: the busiest rank's measured work
+    /// over the mean, minus one (≥ 0; 0 moves them whenever the model finds a better
+    /// split). Default [`DEFAULT_REBALANCE_TOLERANCE`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rebalance_tolerance: Option<f64>,
 }
 
+/// Steps between load-balance checks of a coupled run on several ranks, by default.
+pub const DEFAULT_REBALANCE_EVERY_STEPS: u64 = 1000;
+/// Imbalance a coupled run tolerates before its slabs move, by default (10 %).
+pub const DEFAULT_REBALANCE_TOLERANCE: f64 = 0.1;
+
 impl CouplingSpec {
+    /// Steps between load-balance checks (0: never).
+    pub fn rebalance_every_steps(&self) -> u64 {
+        self.rebalance_every_steps
+            .unwrap_or(DEFAULT_REBALANCE_EVERY_STEPS)
+    }
+
+    /// The imbalance tolerated before the slabs move.
+    pub fn rebalance_tolerance(&self) -> f64 {
+        self.rebalance_tolerance
+            .unwrap_or(DEFAULT_REBALANCE_TOLERANCE)
+    }
+
     /// r_h / r (1 unless the scene sets it).
     pub fn hydrodynamic_radius_ratio(&self) -> f64 {
         self.hydrodynamic_radius_ratio.unwrap_or(1.0)

@@ -146,6 +146,18 @@ pub(super) fn validate(
             ));
         }
     }
+    if let Some(t) = coupling.rebalance_tolerance {
+        if !(0.0..=10.0).contains(&t) {
+            return Err(ctx.err(
+                "rebalance_tolerance",
+                0,
+                format!(
+                    "the tolerated imbalance must lie in [0, 10] (0.1: the busiest rank 10 % \
+                     above the mean), got {t}"
+                ),
+            ));
+        }
+    }
     if let Some((rmin, _)) = radius_range(&spec.sample) {
         // The fluid sees the hydrodynamic radius.
         let cells = 2.0 * rmin * coupling.hydrodynamic_radius_ratio() / units.dx_m;
