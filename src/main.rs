@@ -370,7 +370,10 @@ fn run_fluid_scene(
     }
     println!(
         "{} steps in {:.2} s: {:.1} MLUPS (kernel {:.1})",
-        summary.run.steps, summary.run.wall_time_s, summary.mlups, summary.kernel_mlups
+        summary.run.steps - summary.run.restarted_from_step,
+        summary.run.wall_time_s,
+        summary.mlups,
+        summary.kernel_mlups
     );
     Ok(report(&summary.run, &opts.out_dir))
 }
@@ -443,7 +446,7 @@ fn run_grain_scene(
     println!(
         "{} grains, {} steps (Δt = {:.3e} s, settling {} steps) in {:.2} s: {:.2} M grain-steps/s, {} migrated",
         summary.grains,
-        summary.run.steps,
+        summary.run.steps - summary.run.restarted_from_step,
         summary.time_step_s,
         summary.settle_steps,
         summary.run.wall_time_s,
@@ -634,7 +637,7 @@ fn run_mpm_scene(
     println!(
         "{} material points, {} steps (Δt = {:.3e} s, CFL limit {:.3e} s) in {:.2} s: {:.2} M point-steps/s, {} migrated",
         summary.points,
-        summary.run.steps,
+        summary.run.steps - summary.run.restarted_from_step,
         summary.time_step_s,
         summary.critical_time_step_s,
         summary.run.wall_time_s,

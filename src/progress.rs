@@ -16,6 +16,8 @@ pub struct Progress {
     unit: &'static str,
     start: Instant,
     last_log: Instant,
+    /// The step the run started from (a restart's), which the rate and the ETA count from.
+    first: u64,
 }
 
 impl Progress {
@@ -43,6 +45,7 @@ impl Progress {
             unit: "MLUPS",
             start: now,
             last_log: now,
+            first: 0,
         }
     }
 
@@ -50,6 +53,12 @@ impl Progress {
     pub fn with_unit(mut self, unit: &'static str) -> Self {
         self.unit = unit;
         self
+    }
+
+    /// The run starts after `step` steps (a restart): the clock and the rate start now.
+    pub fn start_at(&mut self, step: u64) {
+        self.first = step;
+        self.start = Instant::now();
     }
 
     /// Report that `step` steps are done.
@@ -70,7 +79,8 @@ impl Progress {
         {
             self.last_log = Instant::now();
             let el = self.start.elapsed().as_secs_f64();
-            let eta = el / step as f64 * (self.total - step) as f64;
+            let done = step.saturating_sub(self.first).max(1);
+            let eta = el / done as f64 * self.total.saturating_sub(step) as f64;
             eprintln!(
                 "step {step}/{} ({:.0}%)  t = {:.4e} s  {:.1} {}  elapsed {el:.1} s  ETA {eta:.1} s",
                 self.total,
@@ -83,7 +93,8 @@ impl Progress {
     }
 
     fn mlups(&self, step: u64) -> f64 {
-        self.cells * step as f64 / self.start.elapsed().as_secs_f64().max(1e-9) / 1e6
+        let done = step.saturating_sub(self.first) as f64;
+        self.cells * done / self.start.elapsed().as_secs_f64().max(1e-9) / 1e6
     }
 
     /// Clear the bar.

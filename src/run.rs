@@ -92,8 +92,9 @@ pub struct Summary {
     /// rescanned). Absent without grains.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub coupling_counts: BTreeMap<&'static str, u64>,
-    /// Coupled runs on several ranks: times the slabs moved to follow the work, and the
-    /// busiest rank's own work over the mean at the last check (1 when never checked).
+    /// Times the slabs moved to follow the work (coupled runs on several ranks), and the
+    /// busiest rank's own work over the mean over the steps since the last check or move
+    /// (1 on one rank).
     pub rebalances: u64,
     /// See `rebalances`.
     pub load_imbalance: f64,
@@ -184,7 +185,7 @@ struct FluidStepper<'a, T: Real + hdf5::H5Type> {
     grains_initial: Vec<[f64; 3]>,
     /// `check`'s memory estimate for the run, all ranks (bytes).
     memory_estimate: f64,
-    /// The load balance of a coupled run on several ranks.
+    /// The load balance of a run on several ranks (only coupled runs move their slabs).
     balance: Option<Balancer>,
 }
 
@@ -630,6 +631,10 @@ fn summarise<T: Real + hdf5::H5Type>(
     let (nx, ny) = (sim.partition.columns(), sim.fluid.lattice().ny());
     let updates = (nx * ny) as f64 * (steps - end.start_step) as f64;
     let (coupling_pass_seconds, coupling_counts) = coupling_figures(sim, comm);
+    let load_imbalance = match &mut st.balance {
+        Some(b) => b.final_imbalance(sim, comm),
+        None => 1.0,
+    };
     let wall = comm.max_f64(end.wall_s);
     let mut halo_bytes = [sim.fluid.lattice().halo_bytes_per_step() as f64];
     comm.sum_f64(&mut halo_bytes);
@@ -682,7 +687,7 @@ fn summarise<T: Real + hdf5::H5Type>(
         coupling_pass_seconds,
         coupling_counts,
         rebalances: st.balance.as_ref().map_or(0, |b| b.rebalances),
-        load_imbalance: st.balance.as_ref().map_or(1.0, |b| b.last_imbalance),
+        load_imbalance,
         snapshot_bytes: st.out.bytes,
         snapshot_write_s: comm.max_f64(st.out.write_s),
         totals_initial: st.totals_initial,

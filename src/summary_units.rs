@@ -29,7 +29,7 @@ const KEY_UNITS: [(&str, &str); 38] = [
     ("rebalances", "count"),
     (
         "load_imbalance",
-        "1 (the busiest rank's own work over the mean, at the last load-balance check)",
+        "1 (the busiest rank's own work over the mean, since the last load-balance check)",
     ),
     ("contacts", "count"),
     ("list_rebuilds", "count"),

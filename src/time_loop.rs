@@ -165,6 +165,7 @@ pub fn drive(
 ) -> Result<LoopEnd, RunError> {
     let mut clock = StageClock::new(&LOOP_STAGES);
     let start_step = stepper.steps_done();
+    progress.start_at(start_step);
     let mut snapshot_at = None;
     if !plan.restarted {
         let t = Instant::now();

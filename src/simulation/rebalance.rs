@@ -41,17 +41,21 @@ pub struct Balancer {
 }
 
 impl Balancer {
-    /// The balancer of a coupled `scene` on `ranks` ranks, from step `start` (a restart's);
-    /// `None` when there is nothing to balance (one rank, no grains, or
-    /// `rebalance_every_steps = 0`).
+    /// The balancer of `scene` on `ranks` ranks, from step `start` (a restart's); `None` on
+    /// one rank. Only a coupled scene with `rebalance_every_steps > 0` moves its slabs; the
+    /// others are measured for the summary's `load_imbalance`.
     pub fn new(scene: &ValidScene, ranks: usize, start: u64) -> Option<Self> {
-        let c = scene.scene.coupling.as_ref()?;
-        scene.scene.grains.as_ref()?;
-        let every = c.rebalance_every_steps();
-        (ranks > 1 && every > 0).then(|| Self {
+        let c = scene.scene.coupling.as_ref();
+        let every = match (c, &scene.scene.grains) {
+            (Some(c), Some(_)) => c.rebalance_every_steps(),
+            _ => 0,
+        };
+        (ranks > 1).then(|| Self {
             every,
             first: start + FIRST_CHECK_STEPS.min(every),
-            tolerance: c.rebalance_tolerance(),
+            tolerance: c.map_or(scene::coupling::DEFAULT_REBALANCE_TOLERANCE, |c| {
+                c.rebalance_tolerance()
+            }),
             seconds_then: [0.0; super::STAGES.len()],
             waited_then: 0.0,
             rebalances: 0,
@@ -61,7 +65,7 @@ impl Balancer {
 
     /// Whether the check is due after `step`.
     pub fn due(&self, step: u64) -> bool {
-        step == self.first || step.is_multiple_of(self.every)
+        self.every > 0 && (step == self.first || step.is_multiple_of(self.every))
     }
 
     /// New slabs for `sim` when the measured work since the last check is out of balance
@@ -69,23 +73,7 @@ impl Balancer {
     /// Every rank decides the same from the same gathered numbers. Collective.
     pub fn plan<T: Real>(&mut self, sim: &Simulation<T>, comm: &dyn Comm) -> Option<SlabPartition> {
         let grains = sim.grains.as_ref()?;
-        let (now, waited) = (sim.times.seconds, sim.times.waited);
-        let d = |i: usize| now[i] - self.seconds_then[i];
-        let stepping: f64 = [
-            stage::COLLIDE_STREAM,
-            stage::HALO_WAIT,
-            stage::COUPLING,
-            stage::DEM,
-            stage::BOUNDARIES,
-        ]
-        .into_iter()
-        .map(d)
-        .sum();
-        let own = (stepping - (waited - self.waited_then)).max(0.0);
-        let cells = sim.fluid.lattice().fluid_cells() as f64;
-        let owned = grains.system().owned() as f64;
-        let all = comm.all_gather_f64(&[own, cells, owned]);
-        let ranks: Vec<[f64; 3]> = all.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
+        let ranks = self.measure(sim, comm);
         let busy: Vec<f64> = ranks.iter().map(|r| r[0]).collect();
         let mean = busy.iter().sum::<f64>() / busy.len() as f64;
         let max = busy.iter().cloned().fold(0.0, f64::max);
@@ -113,6 +101,40 @@ impl Balancer {
         let min_width = grains.min_slab_columns();
         let new = SlabPartition::weighted_min_width(&costs, comm.size(), min_width).ok()?;
         (new != sim.partition && busiest(&new) < busiest(&sim.partition)).then_some(new)
+    }
+
+    /// Each rank's `[own work (s), fluid cells, grains]` since the measurement started, on
+    /// every rank. Collective.
+    fn measure<T: Real>(&self, sim: &Simulation<T>, comm: &dyn Comm) -> Vec<[f64; 3]> {
+        let (now, waited) = (sim.times.seconds, sim.times.waited);
+        let d = |i: usize| now[i] - self.seconds_then[i];
+        let stepping: f64 = [
+            stage::COLLIDE_STREAM,
+            stage::HALO_WAIT,
+            stage::COUPLING,
+            stage::DEM,
+            stage::BOUNDARIES,
+        ]
+        .into_iter()
+        .map(d)
+        .sum();
+        let own = (stepping - (waited - self.waited_then)).max(0.0);
+        let cells = sim.fluid.lattice().fluid_cells() as f64;
+        let owned = sim.grains.as_ref().map_or(0, |g| g.system().owned()) as f64;
+        let all = comm.all_gather_f64(&[own, cells, owned]);
+        all.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect()
+    }
+
+    /// The busiest rank's own work over the mean since the last check (or the slabs last
+    /// moved), for the summary; 1 when nothing was measured. Collective.
+    pub fn final_imbalance<T: Real>(&mut self, sim: &Simulation<T>, comm: &dyn Comm) -> f64 {
+        let ranks = self.measure(sim, comm);
+        let mean = ranks.iter().map(|r| r[0]).sum::<f64>() / ranks.len() as f64;
+        let max = ranks.iter().map(|r| r[0]).fold(0.0, f64::max);
+        if mean > 0.0 {
+            self.last_imbalance = max / mean;
+        }
+        self.last_imbalance
     }
 
     /// Start the next measurement from `sim`'s clocks now (after a check, and after the
