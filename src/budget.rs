@@ -132,8 +132,9 @@ pub const GRAIN_BYTES: f64 = 560.0;
 /// resident memory of the 209 000-grain landslide measured it.
 pub const COUPLED_GRAIN_BYTES: f64 = 1024.0;
 /// Bytes per grain that every rank holds while a coupled run rebalances: the grains'
-/// state gathered from all ranks (22 words) and their contacts' history.
-pub const GATHERED_GRAIN_BYTES: f64 = 256.0;
+/// state gathered from all ranks (22 words, sent and received, then sorted and unpacked)
+/// and their contacts' history.
+pub const GATHERED_GRAIN_BYTES: f64 = 400.0;
 /// Bytes per material point: its 25 words, the step's working arrays (next positions,
 /// gradients, the sorting scratch), the scene's generated copy and a snapshot's
 /// conversions, as the peak resident memory of 0.6 and 1.3 million-point runs measured it.
@@ -163,9 +164,10 @@ pub fn fluid_cost(
     let grain_bytes = grains
         .and_then(|g| scene::estimated_grains(&g.sample))
         .map_or(0.0, |n| n * per_grain);
-    // A snapshot and a rebalance (one more copy of the populations while they move) are
-    // never taken together.
-    let moving = f64::from(u8::from(rebalances)) * 9.0 * bytes;
+    // A snapshot and a rebalance are never taken together. While the populations move, a
+    // rank holds its old block, what it sends and what it receives (two more copies when
+    // the whole slab changes hands), then the received block beside the new lattice.
+    let moving = f64::from(u8::from(rebalances)) * 2.0 * 9.0 * bytes;
     Cost {
         steps,
         memory_bytes: fluid_bytes(

@@ -145,7 +145,8 @@ pub struct LoopEnd {
     pub next_output_s: f64,
     /// The plan's [`LoopPlan::shortened`].
     pub shortened: bool,
-    /// What this rank sent through the loop's steps, its snapshots and checkpoints left out.
+    /// What this rank sent through the loop's steps, its snapshots, checkpoints and
+    /// rebalances left out.
     pub traffic: decomposition::Traffic,
 }
 
@@ -240,9 +241,13 @@ pub fn drive(
             last_checkpoint = Instant::now();
             clock.add("checkpoint", t);
         }
-        if !due.last {
+        // Not on the last step, nor when the run stops here (a signal's grace period is for
+        // the final snapshot and checkpoint); the move's traffic is not a step's.
+        if !due.last && !agreed.stop {
             let t = Instant::now();
+            let sent = decomposition::Traffic::now();
             stepper.rebalance(comm, due)?;
+            output_traffic = output_traffic.plus(decomposition::Traffic::now().since(sent));
             clock.add("rebalance", t);
         }
         progress.update(step);

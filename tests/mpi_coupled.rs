@@ -178,9 +178,10 @@ fn coupled_restart_on_another_rank_count_continues_bit_identically() {
 
 #[test]
 fn rebalanced_coupled_runs_are_bit_identical_to_1_rank() {
-    // Twelve grains slide from the left of a tank to the right under tilted gravity; every
-    // 50 steps the slabs follow the measured work (tolerance 0: whenever the model finds a
-    // better split), moving populations and grains between ranks.
+    // Twelve grains slide from the left of a tank to the right under tilted gravity; 10
+    // steps in and every 49 (odd: the in-place kernel's other layout) the slabs follow the
+    // measured work (tolerance 0: whenever the model finds a better split), moving
+    // populations and grains between ranks.
     let d = tempfile::tempdir().unwrap();
     for scheme in ["bounce-back", "psm"] {
         let scene = with_scheme("tests/scenes/mpi_grains_rebalance.toml", scheme, d.path());
@@ -201,6 +202,11 @@ fn rebalanced_coupled_runs_are_bit_identical_to_1_rank() {
             assert_grains_identical(&one, &many);
             eprintln!("{scheme}: {n} ranks, {moved} rebalances, match 1 rank bit for bit");
         }
+        let two_array = d.path().join(format!("{scheme}-two-array-np2"));
+        run_ok(2, &scene, &two_array, &["--kernel", "two-array"]);
+        assert!(summary(&two_array)["rebalances"].as_u64().unwrap() > 0);
+        assert_bit_identical(&one, &two_array);
+        assert_grains_identical(&one, &two_array);
         // A checkpoint of a rebalanced run restarts on another rank count bit for bit.
         let split = d.path().join(format!("{scheme}-split"));
         run_ok(3, &scene, &split, &["--steps", "400"]);
@@ -210,6 +216,35 @@ fn rebalanced_coupled_runs_are_bit_identical_to_1_rank() {
         assert_eq!(summary(&split)["restarted_from_step"], 400);
         assert_bit_identical(&one, &split);
         assert_grains_identical(&one, &split);
+    }
+}
+
+#[test]
+fn rebalanced_grains_next_to_a_periodic_seam_are_bit_identical() {
+    // Grains reaching across the periodic x faces, their images on the ranks at both ends,
+    // while the slabs move every 25 steps.
+    let d = tempfile::tempdir().unwrap();
+    let text = common::scene_variant(
+        "tests/scenes/mpi_grains_periodic.toml",
+        &[(
+            "scheme = \"psm\"",
+            "scheme = \"psm\"\nrebalance_every_steps = 25\nrebalance_tolerance = 0.0",
+        )],
+    );
+    let scene = d.path().join("periodic.toml");
+    std::fs::write(&scene, text).unwrap();
+    let scene = scene.to_str().unwrap();
+    let one = d.path().join("np1");
+    run_ok(1, scene, &one, &[]);
+    for n in [2, 3] {
+        let many = d.path().join(format!("np{n}"));
+        run_ok(n, scene, &many, &[]);
+        // Two grains on each of 2 ranks are balanced already; 3 ranks hold 1, 2 and 1.
+        if n == 3 {
+            assert!(summary(&many)["rebalances"].as_u64().unwrap() > 0);
+        }
+        assert_bit_identical(&one, &many);
+        assert_grains_identical(&one, &many);
     }
 }
 

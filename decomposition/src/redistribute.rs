@@ -41,7 +41,8 @@ fn rows_per_piece<T>(rows: usize, width: usize) -> usize {
 /// block is `rows` rows of the slab's width (row-major: row `j` of the slab holds
 /// `data[j * width..(j + 1) * width]`). Columns this rank owns in both partitions are
 /// copied; the others travel point to point, one message (or a few pieces, for a large
-/// one) per pair of ranks that share columns. Collective: every rank calls it with the
+/// one) per pair of ranks that share columns. Besides `data` and the result, a rank holds
+/// the columns it sends and those it receives while they travel. Collective: every rank calls it with the
 /// same partitions (same column count and rank count as `comm`).
 pub fn move_columns<T: bytemuck::Pod>(
     comm: &dyn Comm,
@@ -54,15 +55,6 @@ pub fn move_columns<T: bytemuck::Pod>(
     let (mine_old, mine_new) = (old.slab(me), new.slab(me));
     assert_eq!(data.len(), rows * mine_old.width(), "block size");
     assert_eq!(old.columns(), new.columns(), "the same columns");
-    let mut out = vec![T::zeroed(); rows * mine_new.width()];
-    // What stays.
-    if let Some((b, e)) = shared(mine_old, mine_new) {
-        for j in 0..rows {
-            let from = j * mine_old.width() + (b - mine_old.x_begin);
-            let to = j * mine_new.width() + (b - mine_new.x_begin);
-            out[to..to + e - b].copy_from_slice(&data[from..from + e - b]);
-        }
-    }
     // What goes: per peer, its columns of this block, piece by piece.
     let mut sends: Vec<(usize, u16, Vec<T>)> = Vec::new();
     for peer in (0..comm.size()).filter(|&r| r != me) {
@@ -118,6 +110,15 @@ pub fn move_columns<T: bytemuck::Pod>(
         comm.exchange(&outgoing, &mut incoming, &mut || {});
     }
     drop(sends);
+    // The new block, allocated once the messages are out: what stays, then what came.
+    let mut out = vec![T::zeroed(); rows * mine_new.width()];
+    if let Some((b, e)) = shared(mine_old, mine_new) {
+        for j in 0..rows {
+            let from = j * mine_old.width() + (b - mine_old.x_begin);
+            let to = j * mine_new.width() + (b - mine_new.x_begin);
+            out[to..to + e - b].copy_from_slice(&data[from..from + e - b]);
+        }
+    }
     for p in &recvs {
         let (b, e) = p.columns;
         for (k, row) in p.data.chunks_exact(e - b).enumerate() {

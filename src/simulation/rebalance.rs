@@ -30,6 +30,8 @@ pub struct Balancer {
     /// The first check: a few steps into the run, since the starting slabs split the fluid
     /// cells alone.
     first: u64,
+    /// A check came due on an odd step.
+    pending: bool,
     tolerance: f64,
     /// Stage seconds and communication at the start of the measurement.
     seconds_then: [f64; super::STAGES.len()],
@@ -53,6 +55,7 @@ impl Balancer {
         (ranks > 1).then(|| Self {
             every,
             first: start + FIRST_CHECK_STEPS.min(every),
+            pending: false,
             tolerance: c.map_or(scene::coupling::DEFAULT_REBALANCE_TOLERANCE, |c| {
                 c.rebalance_tolerance()
             }),
@@ -63,9 +66,18 @@ impl Balancer {
         })
     }
 
-    /// Whether the check is due after `step`.
-    pub fn due(&self, step: u64) -> bool {
-        self.every > 0 && (step == self.first || step.is_multiple_of(self.every))
+    /// Whether the check is due after `step`: at its cadence, put off to the next even step
+    /// (after an odd step the in-place kernel holds its populations streamed; a move imports
+    /// them back in their own cells, which changes the last bits next to bounce-back grains).
+    pub fn due(&mut self, step: u64) -> bool {
+        if self.every > 0 && (step == self.first || step.is_multiple_of(self.every)) {
+            self.pending = true;
+        }
+        let now = self.pending && step.is_multiple_of(2);
+        if now {
+            self.pending = false;
+        }
+        now
     }
 
     /// New slabs for `sim` when the measured work since the last check is out of balance
@@ -100,7 +112,11 @@ impl Balancer {
         };
         let min_width = grains.min_slab_columns();
         let new = SlabPartition::weighted_min_width(&costs, comm.size(), min_width).ok()?;
-        (new != sim.partition && busiest(&new) < busiest(&sim.partition)).then_some(new)
+        // A move costs several steps: worth it only for a clear gain (any gain when the
+        // scene tolerates no imbalance).
+        let gain = (0.5 * self.tolerance).min(0.05);
+        let better = busiest(&new) < (1.0 - gain) * busiest(&sim.partition);
+        (new != sim.partition && better).then_some(new)
     }
 
     /// Each rank's `[own work (s), fluid cells, grains]` since the measurement started, on
@@ -225,8 +241,8 @@ impl<T: Real> Simulation<T> {
             None => (None, None),
         };
         let before = state.as_ref().map_or(0, |s| s.grains.len());
-        // The old slab goes before the moved columns arrive, and they before the new slab is
-        // allocated: at most two copies of this rank's populations at once.
+        // The old slab goes before the columns move, and the moved block is the only copy
+        // left when the new slab is allocated.
         let old = self.fluid.export_interior();
         self.grains = None;
         self.curved = None;

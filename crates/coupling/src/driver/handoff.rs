@@ -71,7 +71,12 @@ impl LbmDem {
 
     /// The least width of a slab (columns): a grain's reach into its neighbours' cells.
     pub fn min_slab_columns(&self) -> usize {
-        (self.reach_m / self.units.dx_m).ceil() as usize
+        // The setup's own test is `width · Δx ≥ reach`: the least width that passes it.
+        let mut w = (self.reach_m / self.units.dx_m).ceil() as usize;
+        while (w as f64) * self.units.dx_m < self.reach_m {
+            w += 1;
+        }
+        w
     }
 
     /// How many owned grains have their centre in each global lattice column (`columns`
