@@ -195,7 +195,7 @@ fn costs_of(ranks: &[[f64; 3]]) -> (f64, f64) {
 }
 
 /// A one-cell lattice that holds the place of a slab while its state moves.
-fn placeholder<T: Real>() -> Lattice<T> {
+fn one_cell_lattice<T: Real>() -> Lattice<T> {
     Lattice::new(LatticeSetup {
         nx: 1,
         ny: 1,
@@ -246,7 +246,7 @@ impl<T: Real> Simulation<T> {
         let old = self.fluid.export_interior();
         self.grains = None;
         self.curved = None;
-        self.fluid = Box::new(placeholder::<T>());
+        self.fluid = Box::new(one_cell_lattice::<T>());
         let populations = move_columns(comm, &self.partition, &partition, rows, &old);
         drop(old);
         let series = std::mem::take(&mut self.series);
