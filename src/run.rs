@@ -424,7 +424,7 @@ fn set_up<T: Real + hdf5::H5Type>(
         }
         .into());
     }
-    sim.restore(&r.populations, r.run.step, r.run.series);
+    sim.restore(comm, &r.populations, r.run.step, r.run.series);
     let totals = Totals::from_array(r.run.totals_initial);
     Ok((sim, totals, momentum_initial, grains_initial))
 }

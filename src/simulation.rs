@@ -341,8 +341,8 @@ impl<T: Real> Simulation<T> {
     }
 
     /// Continue from a checkpoint: populations, step and probe series. Collective.
-    pub fn restore(&mut self, populations: &[T], step: u64, series: Vec<Series>) {
-        self.fluid.import_interior(populations, step);
+    pub fn restore(&mut self, comm: &dyn Comm, populations: &[T], step: u64, series: Vec<Series>) {
+        self.fluid.import_interior(populations, step, comm);
         self.series = series;
         self.apply_ramp();
     }
@@ -424,6 +424,18 @@ impl<T: Real> Simulation<T> {
         for (x, y, rho, u) in self.link_cell_moments(None) {
             let k = y * f.nx + x;
             (f.rho[k], f.ux[k], f.uy[k]) = (rho, u[0], u[1]);
+        }
+        if let Some(c) = &self.grains {
+            // Under a bounce-back grain: the fluid at rest at the grain's velocity, as
+            // `show_grains` set it. A plain read there would pull values across rank faces
+            // that the neighbour's rest fill does not reach in the pushed layout.
+            let stride = self.fluid.lattice().stride();
+            let (cells, velocity) = c.coupler().rest_cells();
+            for (&k, u) in cells.iter().zip(velocity) {
+                let (x, y) = (k as usize % stride - 1, k as usize / stride - 1);
+                let at = y * f.nx + x;
+                (f.rho[at], f.ux[at], f.uy[at]) = (1.0, u[0], u[1]);
+            }
         }
         if let Some(w) = &self.curved {
             // Inside a curved wall: solid, as [`Fields`] shows solids.

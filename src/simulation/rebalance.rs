@@ -30,8 +30,6 @@ pub struct Balancer {
     /// The first check: a few steps into the run, since the starting slabs split the fluid
     /// cells alone.
     first: u64,
-    /// A check came due on an odd step.
-    pending: bool,
     tolerance: f64,
     /// Stage seconds and communication at the start of the measurement.
     seconds_then: [f64; super::STAGES.len()],
@@ -55,7 +53,6 @@ impl Balancer {
         (ranks > 1).then(|| Self {
             every,
             first: start + FIRST_CHECK_STEPS.min(every),
-            pending: false,
             tolerance: c.map_or(scene::coupling::DEFAULT_REBALANCE_TOLERANCE, |c| {
                 c.rebalance_tolerance()
             }),
@@ -66,18 +63,11 @@ impl Balancer {
         })
     }
 
-    /// Whether the check is due after `step`: at its cadence, put off to the next even step
-    /// (after an odd step the in-place kernel holds its populations streamed; a move imports
-    /// them back in their own cells, which changes the last bits next to bounce-back grains).
-    pub fn due(&mut self, step: u64) -> bool {
-        if self.every > 0 && (step == self.first || step.is_multiple_of(self.every)) {
-            self.pending = true;
-        }
-        let now = self.pending && step.is_multiple_of(2);
-        if now {
-            self.pending = false;
-        }
-        now
+    /// Whether the check is due after `step`: 10 steps in, then at its cadence. A move
+    /// after an odd step is as exact as after an even one: the import keeps the in-place
+    /// kernel's layout (`Lattice::import_interior`).
+    pub fn due(&self, step: u64) -> bool {
+        self.every > 0 && (step == self.first || step.is_multiple_of(self.every))
     }
 
     /// New slabs for `sim` when the measured work since the last check is out of balance
@@ -251,7 +241,7 @@ impl<T: Real> Simulation<T> {
         drop(old);
         let series = std::mem::take(&mut self.series);
         let mut next = Self::on_slabs(scene, comm, self.devices, state, Some(partition))?;
-        next.restore(&populations, step, series);
+        next.restore(comm, &populations, step, series);
         next.times = std::mem::take(&mut self.times);
         if let (Some(g), Some(c)) = (&mut next.grains, counters) {
             g.continue_counters(c);

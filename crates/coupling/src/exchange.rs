@@ -135,6 +135,12 @@ impl Coupler {
         self.cells.link_cells()
     }
 
+    /// The cells under bounce-back grains (padded) and the rigid velocity (lattice units)
+    /// the last [`Exchange::fill_rest`] set each to; none with partially saturated cells.
+    pub fn rest_cells(&self) -> (&[u32], &[[f64; 2]]) {
+        self.cells.rest_cells()
+    }
+
     /// Solid fraction of every interior cell (padded index → Σ ε, capped at 1).
     pub fn solid_fraction(&self, out: &mut [f64]) {
         out.fill(0.0);

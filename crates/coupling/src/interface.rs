@@ -150,6 +150,16 @@ impl Cells {
         }
     }
 
+    /// The cells under bounce-back grains (padded) and their rest velocities (lattice
+    /// units), as the last `fill_rest` set them; none with partially saturated cells.
+    pub(crate) fn rest_cells(&self) -> (&[u32], &[[f64; 2]]) {
+        match self {
+            Cells::BounceBack(l) => (&l.rest_cells, &l.rest),
+            Cells::Interpolated(l) => (&l.rest_cells, &l.rest),
+            Cells::Partial(_) => (&[], &[]),
+        }
+    }
+
     /// The scheme's cells on slab `frame`.
     pub(super) fn new(scheme: Scheme, refill: Refill, frame: SlabFrame) -> Self {
         match scheme {

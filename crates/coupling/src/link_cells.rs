@@ -105,7 +105,8 @@ pub(super) struct LinkCells<R> {
     pub(super) body_start: Vec<u32>,
     /// Momentum per link of the last exchange.
     pub(super) link_momentum: Vec<f64>,
-    /// Scratch of `fill_rest`: the rest velocities of the covered cells.
+    /// The covered cells (padded) of the last `fill_rest`, and their rest velocities.
+    pub(super) rest_cells: Vec<u32>,
     pub(super) rest: Vec<[f64; 2]>,
     /// Cells changing hands in the last remap, and their refills and momenta.
     pub(super) refills: Vec<lbm::moving::Refill>,
@@ -140,6 +141,7 @@ impl<R: LinkRule> LinkCells<R> {
             body_grain: Vec::new(),
             body_start: Vec::new(),
             link_momentum: Vec::new(),
+            rest_cells: Vec::new(),
             rest: Vec::new(),
             refills: Vec::new(),
             newly: Vec::new(),
@@ -261,7 +263,7 @@ impl<R: LinkRule> Interface for LinkCells<R> {
         views: &[GrainView],
     ) {
         let f = c.frame;
-        let mut covered = std::mem::take(&mut self.scratch);
+        let mut covered = std::mem::take(&mut self.rest_cells);
         self.covered_cells(&f, &c.mapped, &mut covered);
         let owner = &self.owner;
         covered
@@ -270,7 +272,7 @@ impl<R: LinkRule> Interface for LinkCells<R> {
             .map(|&k| rigid_velocity(&f, &views[owner[k as usize] as usize], f.centre(k as usize)))
             .collect_into_vec(&mut self.rest);
         fluid.set_rest(&covered, &self.rest);
-        self.scratch = covered;
+        self.rest_cells = covered;
     }
 
     fn solid_fraction(&self, c: &Common, out: &mut [f64]) {

@@ -448,7 +448,7 @@ mod tests {
             metres_per_pixel: 0.001,
         };
         let fig = compose(&panel, &legend);
-        assert!(fig.w >= MIN_WIDTH && fig.w % 2 == 0 && fig.h % 2 == 0);
+        assert!(fig.w >= MIN_WIDTH && fig.w.is_multiple_of(2) && fig.h.is_multiple_of(2));
         assert!(fig.h > panel.h + 2 * font::text_height(ZOOM));
         // The panel is copied unchanged; the legend has ink in it.
         assert_eq!(&fig.rgb[..3], &[10, 20, 30]);

@@ -72,8 +72,9 @@ pub trait FluidBackend<T: Real> {
     fn fields(&mut self, comm: &dyn Comm) -> Fields;
     /// Interior populations `[9][ny][nx]` (checkpoints).
     fn export_interior(&mut self) -> Vec<T>;
-    /// Replace the state with `data` after `step` steps (restart).
-    fn import_interior(&mut self, data: &[T], step: u64);
+    /// Replace the state with `data` after `step` steps (restart, rebalance), in the layout
+    /// a run that had gone on would hold. Collective.
+    fn import_interior(&mut self, data: &[T], step: u64, comm: &dyn Comm);
 }
 
 impl<T: Real> FluidBackend<T> for Lattice<T> {
@@ -142,7 +143,7 @@ impl<T: Real> FluidBackend<T> for Lattice<T> {
     fn export_interior(&mut self) -> Vec<T> {
         Lattice::export_interior(self)
     }
-    fn import_interior(&mut self, data: &[T], step: u64) {
-        Lattice::import_interior(self, data, step)
+    fn import_interior(&mut self, data: &[T], step: u64, comm: &dyn Comm) {
+        Lattice::import_interior(self, data, step, comm)
     }
 }

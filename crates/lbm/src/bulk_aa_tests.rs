@@ -141,7 +141,7 @@ fn one_buffer_lattices_step_in_place_as_two_buffer_ones() {
         lattice_with::<f64>(Collision::Bgk, 2),
     );
     for lat in [&mut one, &mut two] {
-        lat.import_interior(&state, 5);
+        lat.import_interior(&state, 5, &SingleProcess);
         lat.make_in_place();
         lat.step().unwrap();
     }

@@ -386,7 +386,7 @@ impl<T: Real> Lattice<T> {
     /// After a push step: every halo value a cell will pull is written into that cell's
     /// slot (the two-array kernel's halo rules, evaluated on the pushed results), the values
     /// across rank faces exchanged first. Collective when the slab has neighbours.
-    fn drain(&mut self, comm: &dyn Comm) {
+    pub(crate) fn drain(&mut self, comm: &dyn Comm) {
         if self.drain_plan.is_none() {
             self.drain_plan = Some(self.build_drain_plan());
         }

@@ -11,7 +11,7 @@ use super::d2q9::Q;
 use super::forces::ForceSlots;
 use super::real::Real;
 use super::rows::{row_plan, DrainPlan, RowPlan};
-use decomposition::{Side, SlabHalo, SlabPartition};
+use decomposition::{Comm, Side, SlabHalo, SlabPartition};
 use thiserror::Error;
 
 /// A solid body known to the lattice (walls and obstacles).
@@ -386,11 +386,21 @@ impl<T: Real> Lattice<T> {
     /// steps, in both buffers (the one of [`Lattice::new_slab_one_buffer`]), and refill the
     /// local halos. Exchanged halos are filled by
     /// the next step or [`Lattice::refresh_exchange`].
-    pub fn import_interior(&mut self, data: &[T], step: u64) {
+    ///
+    /// In place, the state takes the layout a run that had gone on would hold after `step`
+    /// steps (local after an even step, pushed after an odd one, as the first step starts
+    /// local), so that a restart or a rebalance takes the same steps as the run would have,
+    /// at every link cell and rank face; after an odd step the pushed values are drained
+    /// across the faces as the step would have. Collective when the slab has neighbours.
+    pub fn import_interior(&mut self, data: &[T], step: u64, comm: &dyn Comm) {
         assert_eq!(data.len(), Q * self.ny * self.nx, "checkpoint block size");
         if self.in_place() {
-            // The local layout: every value in its own cell.
-            self.layout = Layout::Local;
+            let pushed = step % 2 == 1;
+            self.layout = if pushed {
+                Layout::Pushed
+            } else {
+                Layout::Local
+            };
             let acc = self.access();
             for i in 0..Q {
                 for y in 0..self.ny {
@@ -402,7 +412,12 @@ impl<T: Real> Lattice<T> {
                 }
             }
             self.step = step;
-            self.fill_halo();
+            self.redrain = false;
+            if pushed {
+                self.drain(comm);
+            } else {
+                self.fill_halo();
+            }
             return;
         }
         for b in 0..self.buffers() {

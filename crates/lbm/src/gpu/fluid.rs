@@ -425,9 +425,9 @@ impl<T: Real> FluidBackend<T> for GpuFluid<T> {
         self.refills(refills, momentum)
     }
 
-    fn import_interior(&mut self, data: &[T], step: u64) {
+    fn import_interior(&mut self, data: &[T], step: u64, comm: &dyn Comm) {
         self.flush();
-        self.host.import_interior(data, step);
+        self.host.import_interior(data, step, comm);
         let counter = step as u32;
         self.ctx.queue.write_buffer(
             &self.bad_buf,
