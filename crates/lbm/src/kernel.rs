@@ -130,7 +130,10 @@ impl<T: Real> Lattice<T> {
     /// slab). Collective when the slab has neighbours.
     pub fn refresh_exchange(&mut self, comm: &dyn Comm) {
         if self.layout == Layout::Pushed {
-            // Already brought in by the last step's drain.
+            // Again what the last step's drain brought in, with any values set since
+            // (the fluid under grains at rest, refilled cells) pushed across the faces as
+            // they are on one rank.
+            self.drain(comm);
             return;
         }
         self.pack_halo();
