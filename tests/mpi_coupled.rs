@@ -202,6 +202,7 @@ fn rebalanced_coupled_runs_are_bit_identical_to_1_rank() {
             assert_grains_identical(&one, &many);
             eprintln!("{scheme}: {n} ranks, {moved} rebalances, match 1 rank bit for bit");
         }
+        assert_grain_energy_matches_the_snapshot(&one, "step_00000600");
         let two_array = d.path().join(format!("{scheme}-two-array-np2"));
         run_ok(2, &scene, &two_array, &["--kernel", "two-array"]);
         assert!(summary(&two_array)["rebalances"].as_u64().unwrap() > 0);
@@ -445,4 +446,34 @@ fn coupled_checkpoint_after_an_odd_step_restarts_bit_identically() {
             assert_eq!(a["totals_final"], b["totals_final"], "{scheme}");
         }
     }
+}
+
+/// The kinetic-energy probe's grain column at `step` is Σ ½m|v|² + ½Iω² of the written
+/// grains (disks of 2500 kg/m³: m = ρπr², I = ½mr²) to 1e-12, and its fluid column is
+/// positive and finite.
+fn assert_grain_energy_matches_the_snapshot(dir: &Path, step: &str) {
+    let f = hdf5::File::open(dir.join("grains.h5")).unwrap();
+    let read = |d: &str| {
+        f.dataset(&format!("{step}/{d}"))
+            .unwrap()
+            .read_raw::<f64>()
+            .unwrap()
+    };
+    let (r, v, w) = (read("radius"), read("velocity"), read("angular_velocity"));
+    let expected: f64 = (0..r.len())
+        .map(|i| {
+            let m = 2500.0 * std::f64::consts::PI * r[i] * r[i];
+            0.5 * m * (v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1])
+                + 0.25 * m * r[i] * r[i] * w[i] * w[i]
+        })
+        .sum();
+    let s = summary(dir);
+    let e = &s["probes"]["energy"];
+    let grains = e["grains_j_m"].as_f64().unwrap();
+    assert!(
+        (grains - expected).abs() <= 1e-12 * expected,
+        "{grains} J/m against {expected}"
+    );
+    let fluid = e["fluid_j_m"].as_f64().unwrap();
+    assert!(fluid.is_finite() && fluid > 0.0, "{e}");
 }

@@ -114,6 +114,14 @@ remove_at_s = 0.0
 '''
 
 
+# The grains' and the fluid's kinetic energy over time (not on the large case: each record
+# reads the whole 51 M-cell field).
+ENERGY = '''[[probes]]
+kind = "kinetic-energy"
+name = "energy"
+'''
+
+
 # The deposit's run-out and excess pore pressure (not on the large start-up case, which
 # stops long before the mass does).
 COLLAPSE = '''[[analyses]]
@@ -199,6 +207,7 @@ kind = "point"
 name = "pore"
 position_m = [{L / 2:.4f}, {dx * 1.5:.6f}]
 
+{"" if size == "large" else ENERGY}
 {"" if size == "large" else COLLAPSE}'''
 
 

@@ -69,6 +69,8 @@ fn validate_probes(s: &Scene, ctx: &Context) -> Result<(), SceneError> {
                     ));
                 }
             }
+            // Every fluid scene has kinetic energy (its grains' part is zero without grains).
+            Probe::KineticEnergy { .. } => {}
         }
     }
     Ok(())

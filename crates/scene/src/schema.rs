@@ -440,6 +440,13 @@ pub enum Probe {
         /// The floor (m).
         floor_y_m: f64,
     },
+    /// Kinetic energy per metre of depth (J/m): of the grains (translation and rotation,
+    /// zero without grains) and of the fluid outside them (Σ (1 − ε) ½ρ|u|² Δx² over the
+    /// fluid cells, ε a cell's solid fraction).
+    KineticEnergy {
+        /// Name (unique).
+        name: String,
+    },
 }
 
 impl Probe {
@@ -449,7 +456,8 @@ impl Probe {
             Probe::Point { name, .. }
             | Probe::Force { name, .. }
             | Probe::Grain { name, .. }
-            | Probe::Deposit { name, .. } => name,
+            | Probe::Deposit { name, .. }
+            | Probe::KineticEnergy { name } => name,
         }
     }
 }

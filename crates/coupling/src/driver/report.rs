@@ -107,6 +107,16 @@ impl LbmDem {
         (all.len() >= 7).then(|| std::array::from_fn(|k| all[k]))
     }
 
+    /// Kinetic energy of every grain, translation and rotation (J/m), the same bits on any
+    /// rank count and in any storage order. Collective.
+    pub fn kinetic_energy(&self, comm: &dyn Comm) -> f64 {
+        let sys = &self.dem.system;
+        let ke: Vec<f64> = (0..sys.owned())
+            .map(|i| sys.grains.kinetic_energy_of_grain(i))
+            .collect();
+        decomposition::reproducible_sums(&[&ke], comm)[0]
+    }
+
     /// Whether each point (m) lies inside a grain as the fluid sees it (radius r_h), among
     /// the grains this rank holds (owned and ghosts: every grain over this rank's slab).
     pub fn covers(&self, points: &[[f64; 2]]) -> Vec<bool> {
