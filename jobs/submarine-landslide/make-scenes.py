@@ -222,6 +222,14 @@ title = "dry landslide {size}, {packing}, slope {theta:g} deg"
 size_m = [{floor:.4f}, {top:.4f}]
 
 {grains_block(size, packing, theta, floor, top)}
+# The tank's east wall, as the submerged twin's grains meet it: without it grains that roll
+# off the bed's end fall for ever and their kinetic energy grows without bound.
+[[grains.walls]]
+name = "end"
+from_m = [{floor:.4f}, 0.0]
+to_m = [{floor:.4f}, {top:.4f}]
+friction = 0.46
+
 [run]
 end_time_s = {end:.3f}
 stop_below_kinetic_energy_j_m = 1e-9

@@ -3,9 +3,11 @@
 
 For each slope angle, writes the scenes of one size with make-scenes.py, runs the four of
 them (sub/dry x loose/dense) and gathers from their summaries the run-out, the front's
-start (t10), duration (t95) and mean speed, and the excess pore pressure under the mass.
-Writes OUT/results.csv, OUT/results.md and, when matplotlib is there, OUT/front.png: the
-front's position against time per angle, dry against submerged, loose against dense.
+start (t10), duration (t95) and mean speed, the excess pore pressure under the mass and the
+grains' peak kinetic energy. Writes OUT/results.csv, OUT/results.md and, when matplotlib is
+there, OUT/front.png (the front's position against time per angle) and OUT/energy.png (the
+grains' kinetic energy against time, and the fluid's in the submerged runs), dry against
+submerged, loose against dense.
 
 Usage: slopes.py --out DIR [--slopes 5 12 20] [--size small] [--grainflow PATH]
        slopes.py --out DIR --plot-only     (tables and plot from finished runs)
@@ -70,19 +72,23 @@ def gather(args):
             for k, key in KEYS:
                 v = res.get(key)
                 row[k] = float("nan") if v is None else float(v)
+            _, grains, _ = energy_series(os.path.dirname(path), case)
+            row["peak_grain_ke_j_m"] = max(grains) if grains else float("nan")
             rows.append(row)
     return rows
 
 
 def write_tables(args, rows):
     with open(os.path.join(args.out, "results.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["slope_deg", "case", "status"] + [k for k, _ in KEYS])
+        names = ["slope_deg", "case", "status"] + [k for k, _ in KEYS] + ["peak_grain_ke_j_m"]
+        w = csv.DictWriter(f, fieldnames=names)
         w.writeheader()
         w.writerows(rows)
     fmt = lambda v, p: "–" if v is None or math.isnan(v) else f"{v:.{p}f}"
     lines = [
-        "| slope | case | run-out | t10/τc | t95/τc | front speed (m/s) | φ | pore p min / max (Pa) |",
-        "|---:|---|---:|---:|---:|---:|---:|---:|",
+        "| slope | case | run-out | t10/τc | t95/τc | front speed (m/s) | φ | pore p min / max (Pa) "
+        "| peak grain KE (mJ/m) |",
+        "|---:|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         pore = (
@@ -93,7 +99,7 @@ def write_tables(args, rows):
         lines.append(
             f"| {r['slope_deg']:g}° | {r['case']} | {fmt(r['runout'], 3)} | {fmt(r['t10_tc'], 1)} "
             f"| {fmt(r['t95_tc'], 1)} | {fmt(r['front_speed_m_s'], 3)} "
-            f"| {fmt(r['packing_fraction'], 3)} | {pore} |"
+            f"| {fmt(r['packing_fraction'], 3)} | {pore} | {fmt(r['peak_grain_ke_j_m'] * 1e3, 3)} |"
         )
     open(os.path.join(args.out, "results.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines))
@@ -109,6 +115,55 @@ def front_series(run_dir, case):
     return [float(r["time_s"]) for r in rows], [float(r["front_m"]) for r in rows]
 
 
+def energy_series(run_dir, case):
+    """(t, grain KE, fluid KE) in J/m: the kinetic-energy probe of a submerged run,
+    front.csv of a dry one (no fluid)."""
+    if case.startswith("sub"):
+        path, grains, fluid = os.path.join(run_dir, "probe_energy.csv"), "grains_j_m", "fluid_j_m"
+    else:
+        path, grains, fluid = os.path.join(run_dir, "front.csv"), "kinetic_energy_j_m", None
+    if not os.path.exists(path):
+        return [], [], []
+    rows = list(csv.DictReader(open(path)))
+    t = [float(r["time_s"]) for r in rows]
+    return t, [float(r[grains]) for r in rows], [float(r[fluid]) for r in rows] if fluid else []
+
+
+STYLE = {
+    "sub-loose": ("tab:blue", "-"),
+    "sub-dense": ("tab:blue", "--"),
+    "dry-loose": ("tab:orange", "-"),
+    "dry-dense": ("tab:orange", "--"),
+}
+
+
+def plot_energy(args, plt):
+    n = len(args.slopes)
+    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.6), sharey=True, squeeze=False)
+    for ax, theta in zip(axes[0], args.slopes):
+        d = os.path.join(args.out, f"slope-{theta:g}")
+        for case in CASES:
+            t, grains, fluid = energy_series(os.path.join(d, scene_name(case, args.size)), case)
+            c, ls = STYLE[case]
+            if t:
+                ax.plot(t, [v * 1e3 for v in grains], color=c, linestyle=ls, label=case)
+            if fluid:
+                ax.plot(t, [v * 1e3 for v in fluid], color="tab:green", linestyle=ls,
+                        label=f"{case} (fluid)")
+        ax.set_title(f"slope {theta:g}°")
+        ax.set_xlabel("time (s)")
+        ax.set_yscale("symlog", linthresh=1e-3)
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel("kinetic energy (mJ per m of depth)")
+    axes[0][0].legend(fontsize=7)
+    fig.suptitle(f"grains' kinetic energy, {args.size} size: dry (orange), submerged (blue); "
+                 "the fluid's (green)")
+    fig.tight_layout()
+    path = os.path.join(args.out, "energy.png")
+    fig.savefig(path, dpi=110)
+    print(f"wrote {path}")
+
+
 def plot(args):
     try:
         import matplotlib
@@ -120,12 +175,7 @@ def plot(args):
         return
     n = len(args.slopes)
     fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.6), sharey=True, squeeze=False)
-    style = {
-        "sub-loose": ("tab:blue", "-"),
-        "sub-dense": ("tab:blue", "--"),
-        "dry-loose": ("tab:orange", "-"),
-        "dry-dense": ("tab:orange", "--"),
-    }
+    style = STYLE
     for ax, theta in zip(axes[0], args.slopes):
         d = os.path.join(args.out, f"slope-{theta:g}")
         for case in CASES:
@@ -143,6 +193,7 @@ def plot(args):
     path = os.path.join(args.out, "front.png")
     fig.savefig(path, dpi=110)
     print(f"wrote {path}")
+    plot_energy(args, plt)
 
 
 def main():
