@@ -443,6 +443,10 @@ fn run_grain_scene(
     if !comm.is_root() {
         return Ok(exit_code(summary.run.status));
     }
+    // What the run found (grains that left the domain), after the scene's own warnings.
+    for w in summary.run.warnings.iter().skip(g.warnings.len()) {
+        eprintln!("warning: {w}");
+    }
     println!(
         "{} grains, {} steps (Δt = {:.3e} s, settling {} steps) in {:.2} s: {:.2} M grain-steps/s, {} migrated",
         summary.grains,

@@ -198,6 +198,25 @@ impl GrainStepper<'_> {
     }
 }
 
+/// A warning when grains ended with their centres outside the domain `size` (m): nothing
+/// but the scene's walls bounds a grains scene, so a grain that rolls off a bed's end falls
+/// for ever, and its energy keeps the run from settling. Collective.
+fn escaped_grains(d: &SlabDem, size: [f64; 2], comm: &dyn Comm) -> Option<String> {
+    let (g, n) = (&d.system.grains, d.system.owned());
+    let outside =
+        |i: usize| !(0.0..=size[0]).contains(&g.x[i]) || !(0.0..=size[1]).contains(&g.y[i]);
+    let mut count = [(0..n).filter(|&i| outside(i)).count() as f64];
+    comm.sum_f64(&mut count);
+    let lowest = -comm.max_f64(-(0..n).map(|i| g.y[i]).fold(f64::INFINITY, f64::min));
+    (count[0] > 0.0).then(|| {
+        format!(
+            "{} grain(s) ended outside the domain [0, {}] × [0, {}] m (the lowest at y = {lowest:.4} \
+             m): nothing but walls holds grains in; add [[grains.walls]] where they left",
+            count[0], size[0], size[1]
+        )
+    })
+}
+
 /// Run a grains scene on every rank of `comm` (collective). Writes `grains.h5` +
 /// `grains.xdmf`, `pictures/grains_*.png` and (rank 0) `summary.json` into `opts.out_dir`.
 pub fn run_grains(
@@ -388,11 +407,13 @@ fn summarise(
     ];
     let comm_wait = comm.max_f64(d.comm_seconds);
     comm.sum_f64(&mut counts);
+    let mut warnings = scene.warnings.clone();
+    warnings.extend(escaped_grains(d, s.domain.size(), comm));
     let mut header = RunHeader::new(
         "grains",
         scene.path.clone(),
         s.title.clone(),
-        scene.warnings.clone(),
+        warnings,
         comm,
     );
     header.status = end.status;

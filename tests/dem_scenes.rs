@@ -116,6 +116,51 @@ fn check_warns_of_grains_with_no_floor() {
     assert!(!coupled.contains("towards no wall"), "{coupled}");
 }
 
+/// `run` warns, on stderr and in `summary.json`, when grains ended outside the domain (they
+/// fell out of a scene with no floor), and not once a floor holds them.
+#[test]
+fn run_warns_of_grains_that_left_the_domain() {
+    let run = |scene: &str| {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("s.toml");
+        std::fs::write(&path, scene).unwrap();
+        let out = tmp.path().join("out");
+        let o = Command::new(BIN)
+            .args(["run", "--quiet", "--out"])
+            .arg(&out)
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        (
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+            s["warnings"].clone(),
+        )
+    };
+    // 0.05 s of free fall: 12 mm, below the floor line for the lower grains (the pack
+    // centred, so that the floor's pile stays inside).
+    let falling = GOOD
+        .replace("end_time_s = 0.01", "end_time_s = 0.05")
+        .replace("min_m = [0.0, 0.0]", "min_m = [0.04, 0.0]")
+        .replace("max_m = [0.02, 0.02]", "max_m = [0.06, 0.02]");
+    let (err, warnings) = run(&falling);
+    assert!(err.contains("ended outside the domain"), "{err}");
+    assert!(
+        warnings.to_string().contains("ended outside the domain"),
+        "{warnings}"
+    );
+    let floor = falling.replace(
+        "[run]",
+        "[[grains.walls]]\nname = \"floor\"\nfrom_m = [-0.01, 0.0]\nto_m = [0.11, 0.0]\n\
+         friction = 0.5\n\n[run]",
+    );
+    let (err, warnings) = run(&floor);
+    assert!(!err.contains("outside the domain"), "{err}");
+    assert!(!warnings.to_string().contains("outside the domain"));
+}
+
 #[test]
 fn bad_grains_scenes_name_the_field() {
     let o = Command::new(BIN)
