@@ -136,7 +136,7 @@ impl Coupler {
     }
 
     /// The cells under bounce-back grains (padded) and the rigid velocity (lattice units)
-    /// the last [`Exchange::fill_rest`] set each to; none with partially saturated cells.
+    /// the last [`Coupler::fill_rest`] set each to; none with partially saturated cells.
     pub fn rest_cells(&self) -> (&[u32], &[[f64; 2]]) {
         self.cells.rest_cells()
     }
