@@ -203,15 +203,26 @@ impl GrainStepper<'_> {
 /// for ever, and its energy keeps the run from settling. Collective.
 fn escaped_grains(d: &SlabDem, size: [f64; 2], comm: &dyn Comm) -> Option<String> {
     let (g, n) = (&d.system.grains, d.system.owned());
-    let outside =
-        |i: usize| !(0.0..=size[0]).contains(&g.x[i]) || !(0.0..=size[1]).contains(&g.y[i]);
-    let mut count = [(0..n).filter(|&i| outside(i)).count() as f64];
+    // A grain with a non-finite position is the instability check's to report.
+    let outside = |i: &usize| {
+        let (x, y) = (g.x[*i], g.y[*i]);
+        x.is_finite()
+            && y.is_finite()
+            && (!(0.0..=size[0]).contains(&x) || !(0.0..=size[1]).contains(&y))
+    };
+    let escaped: Vec<usize> = (0..n).filter(outside).collect();
+    let mut count = [escaped.len() as f64];
     comm.sum_f64(&mut count);
-    let lowest = -comm.max_f64(-(0..n).map(|i| g.y[i]).fold(f64::INFINITY, f64::min));
+    let mine = escaped
+        .iter()
+        .map(|&i| g.y[i])
+        .fold(f64::INFINITY, f64::min);
+    let lowest = -comm.max_f64(-mine);
     (count[0] > 0.0).then(|| {
         format!(
-            "{} grain(s) ended outside the domain [0, {}] × [0, {}] m (the lowest at y = {lowest:.4} \
-             m): nothing but walls holds grains in; add [[grains.walls]] where they left",
+            "{} grain(s) ended outside the domain [0, {}] × [0, {}] m (the lowest of them at \
+             y = {lowest:.4} m): nothing but walls holds grains in; add [[grains.walls]] where \
+             they left",
             count[0], size[0], size[1]
         )
     })
