@@ -186,6 +186,14 @@ pub fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
 }
 
+/// How many values of `a` and `b` differ in their bits (pairwise).
+pub fn bits_differing(a: &[f64], b: &[f64]) -> usize {
+    a.iter()
+        .zip(b)
+        .filter(|(x, y)| x.to_bits() != y.to_bits())
+        .count()
+}
+
 pub fn assert_bit_identical(a: &Path, b: &Path) {
     let (sa, sb) = (
         snapshots(&a.join("fields.h5")),
@@ -196,11 +204,7 @@ pub fn assert_bit_identical(a: &Path, b: &Path) {
         sb.iter().map(|x| &x.0).collect::<Vec<_>>()
     );
     for ((name, va), (_, vb)) in sa.iter().zip(&sb) {
-        let differ = va
-            .iter()
-            .zip(vb)
-            .filter(|(x, y)| x.to_bits() != y.to_bits())
-            .count();
+        let differ = bits_differing(va, vb);
         assert_eq!(
             differ, 0,
             "{name}: {differ} values differ between {a:?} and {b:?}"
@@ -253,11 +257,7 @@ pub fn assert_grains_identical(a: &Path, b: &Path) {
         gb.iter().map(|x| &x.0).collect::<Vec<_>>()
     );
     for ((name, va), (_, vb)) in ga.iter().zip(&gb) {
-        let differ = va
-            .iter()
-            .zip(vb)
-            .filter(|(x, y)| x.to_bits() != y.to_bits())
-            .count();
+        let differ = bits_differing(va, vb);
         assert_eq!(
             differ, 0,
             "{name}: {differ} values differ between {a:?} and {b:?}"
