@@ -341,6 +341,46 @@ pub struct ShareRow {
     pub(super) shares: Vec<Share>,
     /// How many distinct cells they cover.
     pub(super) cells: u32,
+    /// Scratch of the map: the row's shares as each image's walk gave them.
+    pub(super) walked: Vec<Share>,
+    /// Scratch of the map: each image's stretch of `walked`, keyed by its first cell.
+    pub(super) stretches: Vec<(u64, u32, u32)>,
+}
+
+impl ShareRow {
+    /// Fill `shares` with the row's shares sorted by (cell, image), from the shares of each
+    /// image in turn already in `walked`, each image's cells in increasing x (the
+    /// stretches `stretches` of `walked`: key (first cell, image), first and end index):
+    /// the stretches in order of their keys, then an insertion sort that only has to move
+    /// the few shares where neighbouring disks' stretches overlap. The result is a sort of
+    /// the keys (cell, image), unique in a row: the same order whatever the input order.
+    pub(super) fn sort_walked(&mut self) {
+        self.stretches.sort_unstable_by_key(|s| s.0);
+        self.shares.clear();
+        for &(_, a, b) in &self.stretches {
+            self.shares
+                .extend_from_slice(&self.walked[a as usize..b as usize]);
+        }
+        let key = |sh: &Share| (u64::from(sh.cell) << 32) | u64::from(sh.image);
+        let v = &mut self.shares;
+        // Moves beyond a few per share mean stretches that overlap widely (disks deep in
+        // each other): a general sort is then the cheaper one.
+        let (mut moves, budget) = (0usize, 8 * v.len() + 64);
+        for i in 1..v.len() {
+            let (x, kx) = (v[i], key(&v[i]));
+            let mut j = i;
+            while j > 0 && key(&v[j - 1]) > kx {
+                v[j] = v[j - 1];
+                j -= 1;
+            }
+            v[j] = x;
+            moves += i - j;
+            if moves > budget {
+                v.sort_unstable_by_key(key);
+                return;
+            }
+        }
+    }
 }
 
 /// Padded index of the neighbour of `k` at `sign · c_i`.
@@ -352,6 +392,53 @@ pub(super) fn neighbour(f: &SlabFrame, k: usize, i: usize, sign: i64) -> usize {
 
 #[cfg(test)]
 mod tests {
+    use super::{Share, ShareRow};
+
+    /// `ShareRow::sort_walked` gives a full sort by (cell, image) of stretches that each
+    /// increase, in any image order, overlapping by a few cells (touching disks) or widely
+    /// (the general sort's fallback).
+    #[test]
+    fn sorting_the_walked_stretches_is_a_full_sort() {
+        let mut rng = 12345u64;
+        let mut next = |m: u64| {
+            rng = rng
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (rng >> 33) % m
+        };
+        for (case, spread) in [4000u64, 400, 8].into_iter().cycle().take(30).enumerate() {
+            let mut row = ShareRow::default();
+            let images = 1 + next(300) as u32;
+            for image in 0..images {
+                let (first, len) = (next(spread) as u32, 1 + next(12) as u32);
+                let a = row.walked.len() as u32;
+                for c in first..first + len {
+                    let fraction = next(1000) as f64 / 1000.0;
+                    row.walked.push(Share {
+                        fraction,
+                        cell: c,
+                        image,
+                    });
+                }
+                let key = (u64::from(first) << 32) | u64::from(image);
+                row.stretches.push((key, a, row.walked.len() as u32));
+            }
+            let mut expected = row.walked.clone();
+            expected.sort_unstable_by_key(|sh| (u64::from(sh.cell) << 32) | u64::from(sh.image));
+            row.sort_walked();
+            let got: Vec<_> = row
+                .shares
+                .iter()
+                .map(|s| (s.cell, s.image, s.fraction.to_bits()))
+                .collect();
+            let want: Vec<_> = expected
+                .iter()
+                .map(|s| (s.cell, s.image, s.fraction.to_bits()))
+                .collect();
+            assert_eq!(got, want, "case {case} (spread {spread})");
+        }
+    }
+
     use crate::test_slabs::{next, slab};
 
     /// The sorted-row walk visits exactly the cells the full walk visits, in its order,

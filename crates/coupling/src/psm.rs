@@ -130,16 +130,23 @@ impl PartialCells {
             .enumerate()
             .with_min_len(16)
             .for_each(|(y, row)| {
-                let out = &mut row.shares;
-                out.clear();
+                row.walked.clear();
+                row.stretches.clear();
                 for i in in_row(y) {
                     let (g, c) = (disks[i].0 as usize, disks[i].1);
                     let (r, exact) = (views[g].radius, areas(i));
+                    let a = row.walked.len();
+                    let out = &mut row.walked;
                     shares_in_row(avx512, &f, types, r, i as u32, c, y as i64, &exact, out);
+                    if let Some(first) = out.get(a) {
+                        let key = (u64::from(first.cell) << 32) | i as u64;
+                        row.stretches.push((key, a as u32, out.len() as u32));
+                    }
                 }
-                // The row's images come in increasing index (grain order): sorting by
-                // (cell, image) keeps that order among a cell's shares.
-                out.sort_unstable_by_key(|sh| (u64::from(sh.cell) << 32) | u64::from(sh.image));
+                // Sorted by (cell, image): a cell's shares in image order, which is grain
+                // order (a row's images come in increasing index).
+                row.sort_walked();
+                let out = &row.shares;
                 row.cells = out
                     .iter()
                     .enumerate()

@@ -60,8 +60,8 @@ fn lattice_with<T: Real>(collision: Collision, buffers: usize) -> Lattice<T> {
 /// (special cells), a long stretch whose alignment to the kernel's chunks changes from
 /// row to row, lone cells with empty chunks between them, the first and last columns of
 /// even rows; in every
-/// third row, every fifth cell shared by two solids (the other rows' chunks are blended
-/// in lanes, these lane by lane).
+/// third row, every fifth cell shared by two solids (blended in lanes by share layer); one
+/// cell in twelve fully covered (B = 1), some of them shared.
 fn plan<T: Real>(lat: &Lattice<T>) -> PsmPlan {
     let (nx, ny) = (lat.nx(), lat.ny());
     let mut plan = PsmPlan::default();
@@ -82,7 +82,11 @@ fn plan<T: Real>(lat: &Lattice<T>) -> PsmPlan {
             }
             let n = plan.cells.len();
             plan.cells.push(((y + 1) * lat.stride + x + 1) as u32);
-            let b = 0.05 + 0.9 * ((x + 3 * y) % 11) as f64 / 10.0;
+            // Weights 0.05–0.95, and 1 (a fully covered cell) where the pattern gives 11.
+            let b = match (x + 3 * y) % 12 {
+                11 => 1.0,
+                v => 0.05 + 0.9 * v as f64 / 10.0,
+            };
             let two = y % 3 == 0 && n % 5 == 0;
             let parts: &[f64] = if two { &[0.6, 0.4] } else { &[1.0] };
             for (s, part) in parts.iter().enumerate() {

@@ -193,6 +193,38 @@ pub(crate) fn density_ok<T: Real>(new: &[T; Q]) -> bool {
     T::from_f64(1.0) + sum > T::default()
 }
 
+/// The lanes of `b_total` whose cells are fully covered ([`is_full`]).
+#[inline(always)]
+fn full_mask<T: Real, const L: usize>(b_total: Lanes<T, L>) -> u32 {
+    (0..L).fold(0u32, |f, l| f | u32::from(is_full(b_total.0[l])) << l)
+}
+
+/// Write the lanes `mask` of `new` into `post`; returns the lanes of `new` whose density
+/// stays positive ([`density_ok`] in lanes, with its order of additions).
+#[inline(always)]
+fn merge_new<T: Real, const L: usize>(
+    post: &mut [Lanes<T, L>; Q],
+    new: &[Lanes<T, L>; Q],
+    mask: u32,
+) -> u32 {
+    let mut sum = Lanes([T::from_f64(-0.0); L]);
+    each_direction!(i => {
+        sum = sum + new[i];
+    });
+    let ok = (Lanes([T::from_f64(1.0); L]) + sum).greater_mask(T::default());
+    each_direction!(i => {
+        post[i] = Lanes::select(mask, new[i], post[i]);
+    });
+    ok
+}
+
+/// The momenta `p` that the fluid gained from a layer of shares, negated: what the grains
+/// receive (seed eqs. 5.53–5.54), per lane in f64.
+#[inline(always)]
+fn negated_loads<T: Real, const L: usize>(p: [Lanes<T, L>; 2]) -> [[f64; L]; 2] {
+    p.map(|v| std::array::from_fn(|l| -v.0[l].to_f64()))
+}
+
 /// Partially saturated cells that an in-place sweep computes itself, from the values it has
 /// just loaded and collided (no second read of their populations): the plan, where the
 /// momenta go, and where the first bad cell is recorded.
@@ -422,11 +454,12 @@ impl<'a> PartialSweep<'a> {
 
     /// Replace, in the lanes of `post` (the fluid collision of `h`, moments `m`, for the
     /// `L` cells from padded index `k`), those of the plan cells `cells` (which lie among
-    /// them) by the cells' new values, recording the first bad one. Cells of one share are
-    /// blended in lanes, with the operations of [`blend_partial`] in the same order (the
-    /// same bits), and merged into `post` by a lane mask (a lane written alone would send
-    /// the whole chunk through memory); a chunk that holds a cell of several shares goes
-    /// lane by lane.
+    /// them) by the cells' new values, recording the first bad one. The cells are blended in
+    /// lanes, with the operations of [`blend_partial`] in the same order (the same bits), and
+    /// merged into `post` by a lane mask (a lane written alone would send the whole chunk
+    /// through memory): a stretch of one body's cells with its inputs taken as whole windows
+    /// ([`Self::blend_stretch`]), any other chunk one share layer at a time
+    /// ([`Self::blend_layers`]).
     ///
     /// # Safety
     /// The momentum slots of the cells' shares belong to the caller.
@@ -439,112 +472,164 @@ impl<'a> PartialSweep<'a> {
         post: &mut [Lanes<T, L>; Q],
         m: &Moments<Lanes<T, L>>,
     ) {
+        match self.one_body_stretch::<L>(cells.clone(), k) {
+            Some(st) => self.blend_stretch(&st, k, h, post, m),
+            None => self.blend_layers(cells, k, h, post, m),
+        }
+    }
+
+    /// [`Self::blend_lanes`] for the cells of stretch `st`, one share each, all of one body.
+    ///
+    /// # Safety
+    /// As [`Self::blend_lanes`].
+    #[inline(always)]
+    unsafe fn blend_stretch<T: Real, const L: usize>(
+        &self,
+        st: &Stretch,
+        k: usize,
+        h: &[Lanes<T, L>; Q],
+        post: &mut [Lanes<T, L>; Q],
+        m: &Moments<Lanes<T, L>>,
+    ) {
         let plan = self.plan;
         // A chunk lies in one row.
         let y = PsmPlan::row_of(self.stride, k);
-        let zero = T::default();
-        let stretch = self.one_body_stretch::<L>(cells.clone(), k);
-        // Per lane: the arm's x from the stretch body's centre to the cell's (stretches only).
-        let mut arm_x = [0.0f64; L];
-        let (b_total, b, ux, uy, mask) = match &stretch {
-            Some(st) => {
-                let motion = &plan.bodies[st.body];
-                // Each lane's plan cell, share and centre, as if the stretch filled the
-                // chunk (the lanes outside it are masked off below): taken as whole
-                // windows (one bounds check each) and computed in lanes, in
-                // `PsmPlan::velocity`'s arithmetic.
-                let (bn, bs) = (st.n0 - st.l0, st.at0 - st.l0);
-                let (total, shares) = (&plan.total[bn..bn + L], &plan.shares[bs..bs + L]);
-                let b_total: [T; L] = std::array::from_fn(|l| T::from_f64(total[l]));
-                let b: [T; L] = std::array::from_fn(|l| T::from_f64(shares[l].b));
-                let r_y = (y as f64 + 0.5) - motion.centre[1];
-                let ux = T::from_f64(motion.velocity[0] - motion.omega * r_y);
-                // Lane l's centre x, ((x₀ + l) + x0) + ½, is the lane-0 centre plus l
-                // exactly (whole numbers and halves, far below 2⁵²).
-                let centre0 = self.centre_x(st.local_x0);
-                arm_x = std::array::from_fn(|l| (centre0 + l as f64) - motion.centre[0]);
-                let uy: [T; L] = std::array::from_fn(|l| {
-                    T::from_f64(motion.velocity[1] + motion.omega * arm_x[l])
-                });
-                (b_total, b, [ux; L], uy, st.mask())
-            }
-            None => {
-                let lane = |n: usize| plan.cells[n] as usize - k;
-                // The lanes that hold no plan cell get weight 0 and are not written back.
-                let (mut b_total, mut b, mut ux, mut uy) =
-                    ([zero; L], [zero; L], [zero; L], [zero; L]);
-                let mut mask = 0u32;
-                for n in cells.clone() {
-                    let at = plan.start[n] as usize;
-                    if plan.start[n + 1] as usize != at + 1 {
-                        *post = self.blend_each(cells, k, *h, *post, *m);
-                        return;
-                    }
-                    let (l, share) = (lane(n), plan.shares[at]);
-                    let u = plan.velocity(self.stride, plan.cells[n] as usize, y, share);
-                    // Stored lane by lane, loaded once per chunk (a masked blend per value
-                    // and cell compiles to a longer shuffle chain).
-                    b_total[l] = T::from_f64(plan.total[n]);
-                    b[l] = T::from_f64(share.b);
-                    ux[l] = T::from_f64(u[0]);
-                    uy[l] = T::from_f64(u[1]);
-                    mask |= 1 << l;
-                }
-                (b_total, b, ux, uy, mask)
-            }
-        };
-        let mut new = fluid_part(post, Lanes(b_total));
-        let (b, u) = (Lanes(b), [Lanes(ux), Lanes(uy)]);
+        let motion = &plan.bodies[st.body];
+        // Each lane's plan cell, share and centre, as if the stretch filled the chunk (the
+        // lanes outside it are masked off below): taken as whole windows (one bounds check
+        // each) and computed in lanes, in `PsmPlan::velocity`'s arithmetic.
+        let (bn, bs) = (st.n0 - st.l0, st.at0 - st.l0);
+        let (total, shares) = (&plan.total[bn..bn + L], &plan.shares[bs..bs + L]);
+        let b_total: [T; L] = std::array::from_fn(|l| T::from_f64(total[l]));
+        let b: [T; L] = std::array::from_fn(|l| T::from_f64(shares[l].b));
+        let r_y = (y as f64 + 0.5) - motion.centre[1];
+        let ux = T::from_f64(motion.velocity[0] - motion.omega * r_y);
+        // Lane l's centre x, ((x₀ + l) + x0) + ½, is the lane-0 centre plus l exactly (whole
+        // numbers and halves, far below 2⁵²).
+        let centre0 = self.centre_x(st.local_x0);
+        let arm_x: [f64; L] = std::array::from_fn(|l| (centre0 + l as f64) - motion.centre[0]);
+        let uy: [T; L] =
+            std::array::from_fn(|l| T::from_f64(motion.velocity[1] + motion.omega * arm_x[l]));
+        let mask = st.mask();
+        let b_total = Lanes(b_total);
+        let mut new = fluid_part(post, b_total);
+        let (b, u) = (Lanes(b), [Lanes([ux; L]), Lanes(uy)]);
         let p = add_share(&mut new, h, m, b, u);
         // Fully covered cells take the solid's equilibrium (`is_full`).
-        let full = (0..L).fold(0u32, |f, l| f | u32::from(is_full(b_total[l])) << l) & mask;
+        let full = full_mask(b_total) & mask;
         if full != 0 {
-            let mut solid = [Lanes([zero; L]); Q];
+            let mut solid = [Lanes([T::default(); L]); Q];
             add_solid_equilibrium(&mut solid, m, b, u);
             each_direction!(i => {
                 new[i] = Lanes::select(full, solid[i], new[i]);
             });
         }
-        let mut sum = Lanes([T::from_f64(-0.0); L]);
-        each_direction!(i => {
-            sum = sum + new[i];
-        });
-        let ok = (Lanes([T::from_f64(1.0); L]) + sum).greater_mask(zero);
-        each_direction!(i => {
-            post[i] = Lanes::select(mask, new[i], post[i]);
-        });
+        let ok = merge_new(post, &new, mask);
         // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
-        let loads: [[f64; L]; 2] = p.map(|v| std::array::from_fn(|l| -v.0[l].to_f64()));
-        let momentum = |l: usize| [loads[0][l], loads[1][l]];
-        match stretch {
-            Some(st) => {
-                // A body summed here needs no momenta reported (see `BodyColumns`): its
-                // shares' entries are left as they were.
-                let summed = self.sum_stretch(&st, y, &arm_x, &loads);
-                if !summed {
-                    for t in 0..st.cells {
-                        self.mom.write(st.at0 + t, momentum(st.l0 + t));
-                    }
-                }
-                let bad = !ok & st.mask();
-                if bad != 0 {
-                    let first = st.n0 + bad.trailing_zeros() as usize - st.l0;
-                    self.bad.fetch_min(first, Ordering::Relaxed);
+        let loads = negated_loads(p);
+        // A body summed here needs no momenta reported (see `BodyColumns`): its shares'
+        // entries are left as they were.
+        if !self.sum_stretch(st, y, &arm_x, &loads) {
+            for t in 0..st.cells {
+                let l = st.l0 + t;
+                self.mom.write(st.at0 + t, [loads[0][l], loads[1][l]]);
+            }
+        }
+        let bad = !ok & mask;
+        if bad != 0 {
+            let first = st.n0 + bad.trailing_zeros() as usize - st.l0;
+            self.bad.fetch_min(first, Ordering::Relaxed);
+        }
+    }
+
+    /// [`Self::blend_lanes`] for any chunk, one share layer at a time: layer j takes the
+    /// j-th share of every cell that has one (a cell's shares in plan order, as
+    /// [`blend_partial`] adds them), and each layer's sums are merged by its lane mask, so a
+    /// cell of one share sees the operations of one layer only. In a packing, most chunks
+    /// hold a cell of two grains (a contact), so this is the common path there.
+    ///
+    /// # Safety
+    /// As [`Self::blend_lanes`].
+    #[inline(always)]
+    unsafe fn blend_layers<T: Real, const L: usize>(
+        &self,
+        cells: std::ops::Range<usize>,
+        k: usize,
+        h: &[Lanes<T, L>; Q],
+        post: &mut [Lanes<T, L>; Q],
+        m: &Moments<Lanes<T, L>>,
+    ) {
+        let plan = self.plan;
+        // A chunk lies in one row.
+        let y = PsmPlan::row_of(self.stride, k);
+        let zero = T::default();
+        let lane = |n: usize| plan.cells[n] as usize - k;
+        // The lanes that hold no plan cell get weight 0 and are not written back.
+        let mut b_total = [zero; L];
+        let (mut mask, mut layers) = (0u32, 0usize);
+        for n in cells.clone() {
+            // Stored lane by lane, loaded once per chunk (a masked blend per value and cell
+            // compiles to a longer shuffle chain).
+            b_total[lane(n)] = T::from_f64(plan.total[n]);
+            mask |= 1 << lane(n);
+            layers = layers.max((plan.start[n + 1] - plan.start[n]) as usize);
+        }
+        let b_total = Lanes(b_total);
+        let mut new = fluid_part(post, b_total);
+        // Fully covered cells take the solids' equilibria (`is_full`).
+        let full = full_mask(b_total) & mask;
+        let mut solid = [Lanes([zero; L]); Q];
+        for j in 0..layers {
+            let (mut b, mut ux, mut uy) = ([zero; L], [zero; L], [zero; L]);
+            let mut layer = 0u32;
+            for n in cells.clone() {
+                let at = plan.start[n] as usize + j;
+                if at < plan.start[n + 1] as usize {
+                    let (l, share) = (lane(n), plan.shares[at]);
+                    let u = plan.velocity(self.stride, plan.cells[n] as usize, y, share);
+                    b[l] = T::from_f64(share.b);
+                    ux[l] = T::from_f64(u[0]);
+                    uy[l] = T::from_f64(u[1]);
+                    layer |= 1 << l;
                 }
             }
-            None => {
-                for n in cells {
-                    let l = plan.cells[n] as usize - k;
-                    let at = plan.start[n] as usize;
-                    let momentum = momentum(l);
+            let (b, u) = (Lanes(b), [Lanes(ux), Lanes(uy)]);
+            let mut added = new;
+            let p = add_share(&mut added, h, m, b, u);
+            each_direction!(i => {
+                new[i] = Lanes::select(layer, added[i], new[i]);
+            });
+            if full & layer != 0 {
+                let mut added = solid;
+                add_solid_equilibrium(&mut added, m, b, u);
+                each_direction!(i => {
+                    solid[i] = Lanes::select(full & layer, added[i], solid[i]);
+                });
+            }
+            // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
+            let loads = negated_loads(p);
+            for n in cells.clone() {
+                let at = plan.start[n] as usize + j;
+                if at < plan.start[n + 1] as usize {
+                    let l = lane(n);
+                    let momentum = [loads[0][l], loads[1][l]];
                     // A body summed here needs no momenta reported (see `BodyColumns`).
                     if !self.sum_share(at, plan.cells[n] as usize, y, momentum) {
                         self.mom.write(at, momentum);
                     }
-                    if ok >> l & 1 == 0 {
-                        self.bad.fetch_min(n, Ordering::Relaxed);
-                    }
                 }
+            }
+        }
+        if full != 0 {
+            each_direction!(i => {
+                new[i] = Lanes::select(full, solid[i], new[i]);
+            });
+        }
+        let ok = merge_new(post, &new, mask);
+        let bad = !ok & mask;
+        if bad != 0 {
+            if let Some(first) = cells.clone().find(|&n| bad >> lane(n) & 1 != 0) {
+                self.bad.fetch_min(first, Ordering::Relaxed);
             }
         }
     }
@@ -592,40 +677,6 @@ impl<'a> PartialSweep<'a> {
             body: body as usize,
             local_x0: self.local_x(k, y),
         })
-    }
-
-    /// [`Self::blend_lanes`] for a chunk that holds a cell of several shares: each plan
-    /// cell of `cells` in turn, as [`Self::blend`]; returns the new `post`. Out of line
-    /// and by value, so that the common path's lanes need no address.
-    ///
-    /// # Safety
-    /// As [`Self::blend_lanes`].
-    #[cold]
-    #[inline(never)]
-    unsafe fn blend_each<T: Real, const L: usize>(
-        &self,
-        cells: std::ops::Range<usize>,
-        k: usize,
-        h: [Lanes<T, L>; Q],
-        mut post: [Lanes<T, L>; Q],
-        m: Moments<Lanes<T, L>>,
-    ) -> [Lanes<T, L>; Q] {
-        for n in cells {
-            let l = self.plan.cells[n] as usize - k;
-            let pick = |v: &[Lanes<T, L>; Q]| -> [T; Q] { std::array::from_fn(|i| v[i].0[l]) };
-            let mut one = pick(&post);
-            let ml = Moments {
-                drho: m.drho.0[l],
-                rho: m.rho.0[l],
-                ux: m.ux.0[l],
-                uy: m.uy.0[l],
-            };
-            self.blend(n, &pick(&h), &mut one, &ml);
-            for (i, v) in one.into_iter().enumerate() {
-                post[i].0[l] = v;
-            }
-        }
-        post
     }
 
     /// Replace `post`, plan cell `n`'s fluid collision of `h` (moments `m`), by the
