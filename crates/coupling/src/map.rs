@@ -393,6 +393,7 @@ pub(super) fn neighbour(f: &SlabFrame, k: usize, i: usize, sign: i64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::{Share, ShareRow};
+    use crate::test_slabs::{next, slab};
 
     /// `ShareRow::sort_walked` gives a full sort by (cell, image) of stretches that each
     /// increase, in any image order, overlapping by a few cells (touching disks) or widely
@@ -400,7 +401,7 @@ mod tests {
     #[test]
     fn sorting_the_walked_stretches_is_a_full_sort() {
         let mut rng = 12345u64;
-        let mut next = |m: u64| {
+        let mut draw = |m: u64| {
             rng = rng
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
@@ -408,12 +409,12 @@ mod tests {
         };
         for (case, spread) in [4000u64, 400, 8].into_iter().cycle().take(30).enumerate() {
             let mut row = ShareRow::default();
-            let images = 1 + next(300) as u32;
+            let images = 1 + draw(300) as u32;
             for image in 0..images {
-                let (first, len) = (next(spread) as u32, 1 + next(12) as u32);
+                let (first, len) = (draw(spread) as u32, 1 + draw(12) as u32);
                 let a = row.walked.len() as u32;
                 for c in first..first + len {
-                    let fraction = next(1000) as f64 / 1000.0;
+                    let fraction = draw(1000) as f64 / 1000.0;
                     row.walked.push(Share {
                         fraction,
                         cell: c,
@@ -438,8 +439,6 @@ mod tests {
             assert_eq!(got, want, "case {case} (spread {spread})");
         }
     }
-
-    use crate::test_slabs::{next, slab};
 
     /// The sorted-row walk visits exactly the cells the full walk visits, in its order,
     /// for any band, rows empty or not, cells at the slab's first and last columns.

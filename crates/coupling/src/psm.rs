@@ -144,7 +144,7 @@ impl PartialCells {
                     }
                 }
                 // Sorted by (cell, image): a cell's shares in image order, which is grain
-                // order (a row's images come in increasing index).
+                // order (images are numbered in grain order).
                 row.sort_walked();
                 let out = &row.shares;
                 row.cells = out

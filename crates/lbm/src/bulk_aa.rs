@@ -162,8 +162,8 @@ unsafe fn bulk_run_aa<T: Real, C: Collider<T>, const LANES: usize>(
 
 /// As [`bulk_run_aa`], for a stretch `[k0, k0 + n)` of a bulk run that holds the partially
 /// saturated cells `partial`: each of them takes the blend of its fluid collision with the
-/// solid's ([`PartialSweep::blend_lanes`]: a chunk's one-share cells together, others lane
-/// by lane) before the lanes are stored. Those are the one-cell form's values
+/// solid's ([`PartialSweep::blend_lanes`]: one grain's stretch of cells together, any other
+/// chunk one share layer at a time) before the lanes are stored. Those are the one-cell form's values
 /// (`partial::partial_cell`), since lanes and scalars round alike. A kernel of its own, so
 /// that the plain one keeps its registers.
 ///

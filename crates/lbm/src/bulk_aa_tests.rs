@@ -61,7 +61,7 @@ fn lattice_with<T: Real>(collision: Collision, buffers: usize) -> Lattice<T> {
 /// row to row, lone cells with empty chunks between them, the first and last columns of
 /// even rows; in every
 /// third row, every fifth cell shared by two solids (blended in lanes by share layer); one
-/// cell in twelve fully covered (B = 1), some of them shared.
+/// cell in twelve fully covered (B = 1), and every other shared cell.
 fn plan<T: Real>(lat: &Lattice<T>) -> PsmPlan {
     let (nx, ny) = (lat.nx(), lat.ny());
     let mut plan = PsmPlan::default();
@@ -82,12 +82,14 @@ fn plan<T: Real>(lat: &Lattice<T>) -> PsmPlan {
             }
             let n = plan.cells.len();
             plan.cells.push(((y + 1) * lat.stride + x + 1) as u32);
-            // Weights 0.05–0.95, and 1 (a fully covered cell) where the pattern gives 11.
+            let two = y % 3 == 0 && n % 5 == 0;
+            // Weights 0.05–0.95, and 1 (a fully covered cell) where the pattern gives 11
+            // and at every other shared cell.
             let b = match (x + 3 * y) % 12 {
+                _ if two && n % 10 == 0 => 1.0,
                 11 => 1.0,
                 v => 0.05 + 0.9 * v as f64 / 10.0,
             };
-            let two = y % 3 == 0 && n % 5 == 0;
             let parts: &[f64] = if two { &[0.6, 0.4] } else { &[1.0] };
             for (s, part) in parts.iter().enumerate() {
                 // A body per share, spinning about a point off the cell.
@@ -270,8 +272,8 @@ fn bad_cell<T: Real>(n: usize) -> [Option<usize>; 2] {
 }
 
 /// A cell that goes bad is named by its plan index, whichever lane of its chunk it
-/// sits in and whether the chunk is blended in lanes or lane by lane (cells of two
-/// shares), in bulk runs and special cells, as the two-array kernel names it.
+/// sits in and whether the chunk is blended as one grain's stretch or by share layer
+/// (cells of two shares), in bulk runs and special cells, as the two-array kernel names it.
 #[test]
 fn in_place_partial_sweep_names_the_bad_cell() {
     let plan = plan(&lattice::<f32>(Collision::Bgk));
