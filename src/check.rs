@@ -160,11 +160,13 @@ struct CoupledLoad {
 
 /// The coupling's cost per grain and step, in updates of the measured fluid kernel: the
 /// coupling passes and what a grain's partially saturated or link cells add to the sweep.
-/// Measured on 2 cores, each run less its plain fluid sweep and its DEM stage: 1830 in the
-/// large submarine landslide (208 778 grains of 4.6 cells across, 2 ranks, at rest), 3100 in
-/// the medium one (10 791 grains of 4.6 cells, 2 threads, flowing to its end) and about 1600
-/// in the seed's Table 5.3 case (2500 disks); the estimate takes 2400, within 40 % of each.
-const COUPLING_CELLS_PER_GRAIN: f64 = 2400.0;
+/// Measured on 2 cores, each run less its plain fluid sweep and its DEM stage: 1590 in the
+/// medium submarine landslide (dense, 10 994 grains of 4.6 cells across, 2 threads,
+/// flowing to its end), 1830 in the large one (208 778 grains, 2 ranks, at rest; measured
+/// before partially saturated chunks with contacts were blended in lanes, which cut the
+/// medium one's from 3100) and about 1600 in the seed's Table 5.3 case (2500 disks); the
+/// estimate takes 1700, within 10 % of each.
+const COUPLING_CELLS_PER_GRAIN: f64 = 1700.0;
 
 /// The estimated wall time of a run of `steps` steps, on this machine and on `ranks` ranks
 /// of its size, with what it counts; `dem_load` is a coupled scene's grains.
@@ -201,7 +203,7 @@ fn wall_time(
                             "the fluid at {:.0} MLUPS measured here, about {:.0} grains with \
                              {} DEM sub-steps, and the coupling at the cost of \
                              {COUPLING_CELLS_PER_GRAIN:.0} fluid cell updates per grain and \
-                             step (measured on three coupled cases, within 40 %)",
+                             step (measured on three coupled cases, within 10 %)",
                             rate / 1e6,
                             load.grains,
                             load.substeps,
