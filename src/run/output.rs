@@ -118,12 +118,15 @@ impl Output {
                 FieldName::Density => {
                     Cow::Owned(f.rho.iter().map(|r| r * u.density_kg_m3).collect())
                 }
-                FieldName::Velocity => Cow::Owned(
-                    f.ux.iter()
-                        .zip(&f.uy)
-                        .flat_map(|(a, b)| [u.velocity_to_si(*a), u.velocity_to_si(*b), 0.0])
-                        .collect(),
-                ),
+                FieldName::Velocity => {
+                    // Sized up front: a flattening iterator would grow the vector by
+                    // doubling, holding up to twice the field while it copies.
+                    let mut v = Vec::with_capacity(3 * f.ux.len());
+                    for (a, b) in f.ux.iter().zip(&f.uy) {
+                        v.extend_from_slice(&[u.velocity_to_si(*a), u.velocity_to_si(*b), 0.0]);
+                    }
+                    Cow::Owned(v)
+                }
                 FieldName::Pressure => {
                     Cow::Owned(f.rho.iter().map(|r| u.drho_to_pressure(r - 1.0)).collect())
                 }
