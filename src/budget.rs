@@ -83,37 +83,48 @@ pub fn fluid_bytes(cells: [usize; 2], buffers: f64, bytes: f64, snapshot: f64) -
     n * (buffers * 9.0 * bytes + CELL_BYTES + snapshot)
 }
 
-/// What a snapshot of a fluid scene with `output` adds per cell of the whole lattice, all
-/// ranks together (bytes): the fields in f64 and their conversions for the HDF5 file
-/// ([`SNAPSHOT_BYTES_PER_CELL`], each rank its slab) and the pictured field gathered on
-/// rank 0 ([`PICTURE_BYTES_PER_CELL`]). On one rank the two are not held together.
-pub fn snapshot_bytes_per_cell(output: &scene::Output, ranks: usize) -> f64 {
-    let fields = !output.fields().is_empty();
-    let pictures = output.pictures();
-    match (ranks <= 1, fields, pictures) {
+/// What a snapshot or a checkpoint of a fluid scene with `output` adds per cell of the
+/// whole lattice, all ranks together, in a run of `bytes`-byte reals (bytes): the fields in
+/// f64 and their conversions for the HDF5 file ([`SNAPSHOT_BYTES_PER_CELL`], each rank its
+/// slab) and the pictured fields ([`PICTURE_BYTES_PER_CELL`] beside them on one rank,
+/// [`GATHERED_PICTURE_BYTES_PER_CELL`] gathered on rank 0 of several); or, when the scene
+/// writes checkpoints, the copy of the populations a checkpoint writes from (9 reals per
+/// cell), whichever is larger: the two are never held together.
+pub fn snapshot_bytes_per_cell(output: &scene::Output, ranks: usize, bytes: f64) -> f64 {
+    let (fields, pictures) = (!output.fields().is_empty(), output.pictures());
+    let one = |b: bool| f64::from(u8::from(b));
+    let snapshot = match (ranks <= 1, fields, pictures) {
         (_, false, false) => 0.0,
-        (true, _, _) => SNAPSHOT_BYTES_PER_CELL,
+        (true, _, p) => SNAPSHOT_BYTES_PER_CELL + one(p) * PICTURE_BYTES_PER_CELL,
         (false, f, p) => {
-            f64::from(u8::from(f)) * SNAPSHOT_BYTES_PER_CELL
-                + f64::from(u8::from(p)) * PICTURE_BYTES_PER_CELL
+            one(f) * SNAPSHOT_BYTES_PER_CELL + one(p) * GATHERED_PICTURE_BYTES_PER_CELL
         }
-    }
+    };
+    let checkpoints = output.checkpoint_at_end()
+        || output.checkpoint_every_steps() > 0
+        || output.checkpoint_every_minutes() > 0.0;
+    snapshot.max(one(checkpoints) * 9.0 * bytes)
 }
 
 /// What a fluid run holds per cell beyond its populations (bytes): the cell types, the
-/// totals' fields and the row plans, as the peak resident memory of a 1024² box without
-/// snapshots measured it (`tests/memory_estimate.rs`). A coupled run's maps and shares
-/// per cell fit in it: the 51 M-cell landslide measured nothing more.
-pub const CELL_BYTES: f64 = 24.0;
+/// totals' fields and the row plans, as the peak resident memory of 1024² and 2048² boxes
+/// without snapshots measured it in f32 and f64 (`tests/memory_estimate.rs`). A coupled
+/// run's per-cell maps fit in it; its per-grain tables are [`COUPLED_GRAIN_BYTES`].
+pub const CELL_BYTES: f64 = 27.0;
 
-/// What a snapshot adds per cell while it is taken (bytes): the fields in f64 and their
-/// conversions for the HDF5 file, as the peak resident memory of a 1024² box measured it in
-/// f32 and f64.
-pub const SNAPSHOT_BYTES_PER_CELL: f64 = 52.0;
+/// What a snapshot adds per cell while it is taken (bytes): the fields in f64 (ρ, u_x,
+/// u_y) and each one's conversion for the HDF5 file in turn, as the peak resident memory of
+/// 1024² and 2048² boxes measured it in f32 and f64, and the medium landslide.
+pub const SNAPSHOT_BYTES_PER_CELL: f64 = 24.0;
 
-/// What the pictures add on rank 0 per cell of the whole lattice (bytes): the gathered
-/// field and its colours, as a 1024² box on two ranks measured it.
-pub const PICTURE_BYTES_PER_CELL: f64 = 40.0;
+/// What the pictures add per cell on one rank beside the snapshot's fields (bytes): the
+/// drawn speed and vorticity and the fluid mask, as the same boxes and the medium landslide
+/// measured it (8–9.4).
+pub const PICTURE_BYTES_PER_CELL: f64 = 10.0;
+
+/// What the pictures add on rank 0 of several per cell of the whole lattice (bytes): the
+/// gathered fields and their colours, as a 1024² box on two ranks measured it.
+pub const GATHERED_PICTURE_BYTES_PER_CELL: f64 = 60.0;
 
 /// What the one process of a run without MPI holds whatever its scene (bytes): the
 /// program and its libraries (MPI, HDF5, the GPU loader), thread stacks and the
@@ -127,18 +138,21 @@ pub const RANK_BYTES: f64 = 30.0 * 1048576.0;
 /// lists, the packing's working copies and a snapshot's conversions, as the peak resident
 /// memory of a 113 000-grain run measured it (`tests/memory_estimate.rs`).
 pub const GRAIN_BYTES: f64 = 560.0;
-/// Bytes per grain of a coupled run: a grains run's and the coupling's per-grain state
-/// (its views, hand-over loads, carried forces and covered-cell lists), as the peak
-/// resident memory of the 209 000-grain landslide measured it.
-pub const COUPLED_GRAIN_BYTES: f64 = 1024.0;
+/// Bytes per (estimated) grain of a coupled run: a grains run's and the coupling's
+/// per-grain state (its views, hand-over loads, carried forces), and the per-step tables of
+/// the cells it covers (the partially saturated plan, the moving cells' momentum slots, the
+/// two column sums, the map's line tables: 3 KB per grain of 3.7–5.5 cells across in the
+/// heap profiles of the landslides), as the peak resident memory of the medium landslide
+/// measured it; the large one's peak lies within 2 %.
+pub const COUPLED_GRAIN_BYTES: f64 = 4608.0;
 /// Bytes per grain that every rank holds while a coupled run rebalances: the grains'
 /// state gathered from all ranks (22 words, sent and received, then sorted and unpacked)
 /// and their contacts' history.
 pub const GATHERED_GRAIN_BYTES: f64 = 400.0;
 /// Bytes per material point: its 25 words, the step's working arrays (next positions,
 /// gradients, the sorting scratch), the scene's generated copy and a snapshot's
-/// conversions, as the peak resident memory of 0.6 and 1.3 million-point runs measured it.
-pub const POINT_BYTES: f64 = 680.0;
+/// conversions, as the peak resident memory of a 0.64 million-point run measured it.
+pub const POINT_BYTES: f64 = 580.0;
 /// Bytes per background-grid node (about 12 words). See [`POINT_BYTES`].
 pub const NODE_BYTES: f64 = 32.0;
 
@@ -174,7 +188,7 @@ pub fn fluid_cost(
             scene.scene.domain.cells,
             buffers,
             bytes,
-            snapshot_bytes_per_cell(&scene.scene.output, ranks).max(moving),
+            snapshot_bytes_per_cell(&scene.scene.output, ranks, bytes).max(moving),
         ) + grain_bytes
             + processes(ranks),
     }

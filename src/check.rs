@@ -365,8 +365,8 @@ fn print_check(
     let one = s.scene.run.backend == scene::Backend::Cpu
         && crate::simulation::in_place(s.scene.run.kernel, s.scene.grains.is_some());
     let buffers = if one { 1.0 } else { 2.0 };
-    let snapshot = budget::snapshot_bytes_per_cell(&s.scene.output, 1);
-    let bytes = |b: f64| budget::fluid_bytes([nx, ny], buffers, b, snapshot);
+    let snapshot = |b: f64| budget::snapshot_bytes_per_cell(&s.scene.output, 1, b);
+    let bytes = |b: f64| budget::fluid_bytes([nx, ny], buffers, b, snapshot(b));
     say!(
         out,
         "  memory estimate  {:.1} MiB in f64, {:.1} MiB in f32 ({} distribution buffer{}, cell types{})",
@@ -374,7 +374,7 @@ fn print_check(
         bytes(4.0) / 1048576.0,
         buffers,
         if one { ", in place" } else { "s" },
-        if snapshot > 0.0 { ", snapshot fields" } else { "" }
+        if snapshot(4.0) > 0.0 { ", snapshot fields" } else { "" }
     );
     let mut stable = true;
     let mut load = None;
