@@ -89,7 +89,8 @@ pub fn fluid_bytes(cells: [usize; 2], buffers: f64, bytes: f64, snapshot: f64) -
 /// slab) and the pictured fields ([`PICTURE_BYTES_PER_CELL`] beside them on one rank,
 /// [`GATHERED_PICTURE_BYTES_PER_CELL`] gathered on rank 0 of several); or, when the scene
 /// writes checkpoints, the copy of the populations a checkpoint writes from (9 reals per
-/// cell), whichever is larger: the two are never held together.
+/// cell), whichever is larger: a box that snapshots and checkpoints at its end peaks at the
+/// larger of the two, not their sum.
 pub fn snapshot_bytes_per_cell(output: &scene::Output, ranks: usize, bytes: f64) -> f64 {
     let (fields, pictures) = (!output.fields().is_empty(), output.pictures());
     let one = |b: bool| f64::from(u8::from(b));
@@ -119,7 +120,7 @@ pub const SNAPSHOT_BYTES_PER_CELL: f64 = 24.0;
 
 /// What the pictures add per cell on one rank beside the snapshot's fields (bytes): the
 /// drawn speed and vorticity and the fluid mask, as the same boxes and the medium landslide
-/// measured it (8–9.4).
+/// measured it (9.4 in the boxes, 8 in the landslide).
 pub const PICTURE_BYTES_PER_CELL: f64 = 10.0;
 
 /// What the pictures add on rank 0 of several per cell of the whole lattice (bytes): the

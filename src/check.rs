@@ -374,7 +374,14 @@ fn print_check(
         bytes(4.0) / 1048576.0,
         buffers,
         if one { ", in place" } else { "s" },
-        if snapshot(4.0) > 0.0 { ", snapshot fields" } else { "" }
+        match (
+            budget::snapshot_bytes_per_cell(&s.scene.output, 1, 0.0) > 0.0,
+            snapshot(4.0) > 0.0
+        ) {
+            (true, _) => ", snapshot fields",
+            (false, true) => ", checkpoint copy",
+            _ => "",
+        }
     );
     let mut stable = true;
     let mut load = None;

@@ -1,6 +1,7 @@
 //! The `grainflow` binary: parse the CLI, load the scene, run it. The only place that uses anyhow.
 
 mod cli;
+mod malloc;
 
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -24,7 +25,7 @@ fn main() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    fix_mmap_threshold();
+    malloc::fix_mmap_threshold();
     match real_main() {
         Ok(code) => std::process::exit(code),
         Err(e) => {
@@ -34,25 +35,6 @@ fn main() {
             let line = format!("error: {}\n", describe(&e));
             let _ = std::io::stderr().write_all(line.as_bytes());
             std::process::exit(1);
-        }
-    }
-}
-
-/// Blocks from 4 MiB up come straight from the kernel and go back to it when freed.
-/// glibc's default threshold rises to the size of each large block freed (up to 32 MiB), so
-/// the fields, conversions and coupling tables of a few to a few tens of MB that a run
-/// frees and allocates again land in the heap instead, where fragmentation keeps them
-/// resident: the medium landslide's peak resident memory is 14 % lower with the threshold
-/// fixed, and its step no slower. A threshold the user set (`MALLOC_MMAP_THRESHOLD_`,
-/// `GLIBC_TUNABLES`) is left alone.
-fn fix_mmap_threshold() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    if std::env::var_os("MALLOC_MMAP_THRESHOLD_").is_none()
-        && std::env::var_os("GLIBC_TUNABLES").is_none()
-    {
-        // SAFETY: a malloc tuning call at start-up, before any other thread exists.
-        unsafe {
-            libc::mallopt(libc::M_MMAP_THRESHOLD, 4 << 20);
         }
     }
 }

@@ -74,7 +74,7 @@ impl<T: Real> AlignedBuf<T> {
 /// process allocated, with transparent huge pages (Linux `madvise(MADV_HUGEPAGE)`): where THP
 /// is set to `madvise`, as on Debian's default kernels, nothing else gets them. Pages not yet
 /// touched get them at their first touch (a fresh mapping, as glibc gives allocations above
-/// its mmap threshold, 32 MiB at most; a smaller range may lie in the heap, where the advice
+/// its mmap threshold, which the binary fixes at 4 MiB; a smaller range may lie in the heap, where the advice
 /// outlives the buffer). Only advice: a kernel without THP ignores it, and the contents are
 /// unchanged either way. Ranges under 4 MiB are left alone (they would hold at most one huge
 /// page). Nothing off Linux.

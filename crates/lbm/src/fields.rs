@@ -239,8 +239,9 @@ impl Fields {
 mod tests {
     use super::Fields;
 
-    /// A 9 × 6 field with u = (−Ω y + a x², Ω x) (rotation plus a shear that central
-    /// differences do not see in x), a solid cell in the middle and one at an edge.
+    /// A 9 × 6 field with u = (−Ω y + a x², Ω x) (solid-body rotation, plus a term in u_x
+    /// that ω does not contain: it shows a mix-up of the axes), a solid cell in the middle
+    /// and one at an edge.
     fn field() -> Fields {
         let (nx, ny, omega) = (9, 6, 0.01);
         let mut f = Fields {
@@ -319,6 +320,102 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+
+    /// The widened-copy vorticity this implementation replaced, kept as the reference: the
+    /// slab widened by its neighbour columns, then central differences (one-sided next to
+    /// solids and the edge) on the widened field.
+    fn reference(
+        f: &Fields,
+        west: Option<(&[f64], &[bool])>,
+        east: Option<(&[f64], &[bool])>,
+    ) -> Vec<f64> {
+        let (l, r) = (west.is_some() as usize, east.is_some() as usize);
+        let (nx, ny, wide) = (f.nx, f.ny, f.nx + l + r);
+        let (mut ux, mut uy, mut fl) = (
+            vec![0.0; wide * ny],
+            vec![0.0; wide * ny],
+            vec![false; wide * ny],
+        );
+        for y in 0..ny {
+            let (d, s) = (y * wide + l, y * nx);
+            ux[d..d + nx].copy_from_slice(&f.ux[s..s + nx]);
+            uy[d..d + nx].copy_from_slice(&f.uy[s..s + nx]);
+            fl[d..d + nx].copy_from_slice(&f.fluid[s..s + nx]);
+            if let Some((u, g)) = west {
+                (uy[y * wide], fl[y * wide]) = (u[y], g[y]);
+            }
+            if let Some((u, g)) = east {
+                (uy[y * wide + wide - 1], fl[y * wide + wide - 1]) = (u[y], g[y]);
+            }
+        }
+        let ok = |x: isize, y: isize| {
+            x >= 0
+                && y >= 0
+                && (x as usize) < wide
+                && (y as usize) < ny
+                && fl[y as usize * wide + x as usize]
+        };
+        let deriv = |v: &[f64], x: usize, y: usize, dx: isize, dy: isize| {
+            let (xi, yi) = (x as isize, y as isize);
+            let at = |a: isize, b: isize| v[b as usize * wide + a as usize];
+            match (ok(xi + dx, yi + dy), ok(xi - dx, yi - dy)) {
+                (true, true) => 0.5 * (at(xi + dx, yi + dy) - at(xi - dx, yi - dy)),
+                (true, false) => at(xi + dx, yi + dy) - at(xi, yi),
+                (false, true) => at(xi, yi) - at(xi - dx, yi - dy),
+                _ => 0.0,
+            }
+        };
+        let mut w = vec![0.0; nx * ny];
+        for y in 0..ny {
+            for x in 0..nx {
+                if fl[y * wide + x + l] {
+                    w[y * nx + x] = deriv(&uy, x + l, y, 1, 0) - deriv(&ux, x + l, y, 0, 1);
+                }
+            }
+        }
+        w
+    }
+
+    /// Random velocities (zero in solids, as `Lattice::fields` gives them) on random solids,
+    /// with and without neighbour columns on either side: the same bits as the reference.
+    #[test]
+    fn random_fields_give_the_widened_copys_bits() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..40 {
+            let (nx, ny) = (1 + case % 7, 1 + case % 5);
+            let mut f = Fields {
+                nx,
+                ny,
+                rho: vec![1.0; nx * ny],
+                ux: vec![0.0; nx * ny],
+                uy: vec![0.0; nx * ny],
+                fluid: vec![true; nx * ny],
+            };
+            for k in 0..nx * ny {
+                f.fluid[k] = next() > 0.3;
+                if f.fluid[k] {
+                    (f.ux[k], f.uy[k]) = (next() - 0.5, next() - 0.5);
+                }
+            }
+            let side = |next: &mut dyn FnMut() -> f64| -> (Vec<f64>, Vec<bool>) {
+                (0..ny).map(|_| (next() - 0.5, next() > 0.3)).unzip()
+            };
+            let (w, e) = (side(&mut next), side(&mut next));
+            for (west, east) in [(false, false), (true, false), (false, true), (true, true)] {
+                let a = west.then_some((w.0.as_slice(), w.1.as_slice()));
+                let b = east.then_some((e.0.as_slice(), e.1.as_slice()));
+                let got: Vec<u64> = f.vorticity_with(a, b).iter().map(|v| v.to_bits()).collect();
+                let want: Vec<u64> = reference(&f, a, b).iter().map(|v| v.to_bits()).collect();
+                assert_eq!(got, want, "case {case}, west {west}, east {east}");
             }
         }
     }
