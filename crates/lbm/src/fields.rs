@@ -239,19 +239,24 @@ impl Fields {
 mod tests {
     use super::Fields;
 
-    /// A 9 × 6 field with u = (−Ω y + a x², Ω x) (solid-body rotation, plus a term in u_x
-    /// that ω does not contain: it shows a mix-up of the axes), a solid cell in the middle
-    /// and one at an edge.
-    fn field() -> Fields {
-        let (nx, ny, omega) = (9, 6, 0.01);
-        let mut f = Fields {
+    /// An `nx × ny` field at rest, every cell fluid.
+    fn still(nx: usize, ny: usize) -> Fields {
+        Fields {
             nx,
             ny,
             rho: vec![1.0; nx * ny],
             ux: vec![0.0; nx * ny],
             uy: vec![0.0; nx * ny],
             fluid: vec![true; nx * ny],
-        };
+        }
+    }
+
+    /// A 9 × 6 field with u = (−Ω y + a x², Ω x) (solid-body rotation, plus a term in u_x
+    /// that ω does not contain: it shows a mix-up of the axes), a solid cell in the middle
+    /// and one at an edge.
+    fn field() -> Fields {
+        let (nx, ny, omega) = (9, 6, 0.01);
+        let mut f = still(nx, ny);
         for y in 0..ny {
             for x in 0..nx {
                 let k = y * nx + x;
@@ -392,14 +397,7 @@ mod tests {
         };
         for case in 0..40 {
             let (nx, ny) = (1 + case % 7, 1 + case % 5);
-            let mut f = Fields {
-                nx,
-                ny,
-                rho: vec![1.0; nx * ny],
-                ux: vec![0.0; nx * ny],
-                uy: vec![0.0; nx * ny],
-                fluid: vec![true; nx * ny],
-            };
+            let mut f = still(nx, ny);
             for k in 0..nx * ny {
                 f.fluid[k] = next() > 0.3;
                 if f.fluid[k] {
