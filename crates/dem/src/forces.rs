@@ -9,9 +9,10 @@ use rayon::prelude::*;
 
 impl DemSystem {
     /// Forces and torques on every owned grain at the current positions (velocities as
-    /// they are, i.e. at the half step inside a step). Precondition: the Verlet list is
-    /// current.
-    pub(crate) fn compute_forces(&mut self) {
+    /// they are, i.e. at the half step inside a step); then, with `kick = Some(h)`, each
+    /// owned grain's velocities advanced by h (s) under them (a half kick, done in the same
+    /// pass). Precondition: the Verlet list is current.
+    pub(crate) fn compute_forces(&mut self, kick: Option<f64>) {
         let g = &self.grains;
         let (model, dt) = (&self.model, self.dt);
         let zeta = model.damping_ratio();
@@ -87,7 +88,7 @@ impl DemSystem {
             .map(|k| self.wall_contact(wall_owner(k), self.wall_cand[k] as usize, zeta))
             .collect_into_vec(&mut wall_hits);
         // Pass 2, per owned grain: gravity and global damping, its pair contacts by
-        // increasing partner id, then its walls by index.
+        // increasing partner id, then its walls by index; then its half kick.
         let owned = self.owned;
         let Grains {
             fx,
@@ -101,22 +102,27 @@ impl DemSystem {
             inv_inertia,
             ..
         } = &mut self.grains;
-        let (m, vx, vy, r, omega, inv_inertia) = (&*m, &*vx, &*vy, &*r, &*omega, &*inv_inertia);
+        let (m, r, inv_inertia) = (&*m, &*r, &*inv_inertia);
         let (adj_start, adj) = (&self.adj_start, &self.adj);
         let wall_start = &self.wall_start;
         let (gravity, alpha) = (self.gravity, self.global_damping);
         let (results_ref, hits_ref) = (&results, &wall_hits);
         let external = &self.external;
-        fx[..owned]
-            .par_iter_mut()
-            .zip(fy[..owned].par_iter_mut())
-            .zip(torque[..owned].par_iter_mut())
+        (
+            fx[..owned].par_iter_mut(),
+            fy[..owned].par_iter_mut(),
+            torque[..owned].par_iter_mut(),
+            vx[..owned].par_iter_mut(),
+            vy[..owned].par_iter_mut(),
+            omega[..owned].par_iter_mut(),
+        )
+            .into_par_iter()
             .enumerate()
             .with_min_len(1024)
-            .for_each(|(i, ((fxi, fyi), ti))| {
+            .for_each(|(i, (fxi, fyi, ti, vxi, vyi, wi))| {
                 let mut f = [
-                    m[i] * (gravity[0] - alpha * vx[i]),
-                    m[i] * (gravity[1] - alpha * vy[i]),
+                    m[i] * (gravity[0] - alpha * *vxi),
+                    m[i] * (gravity[1] - alpha * *vyi),
                 ];
                 let mut t = 0.0;
                 for &e in &adj[adj_start[i] as usize..adj_start[i + 1] as usize] {
@@ -142,7 +148,7 @@ impl DemSystem {
                     t -= r[i] * c.ft;
                     if mu_r > 0.0 {
                         let limit = mu_r * r[i] * c.fn_.abs();
-                        t += rolling_torque(limit, omega[i], inv_inertia[i], dt);
+                        t += rolling_torque(limit, *wi, inv_inertia[i], dt);
                     }
                 }
                 if let Some(e) = external.get(i) {
@@ -153,6 +159,11 @@ impl DemSystem {
                 *fxi = f[0];
                 *fyi = f[1];
                 *ti = t;
+                if let Some(h) = kick {
+                    *vxi += h * f[0] / m[i];
+                    *vyi += h * f[1] / m[i];
+                    *wi += h * t * inv_inertia[i];
+                }
             });
         let mut history = std::mem::take(&mut self.spare);
         history.clear();

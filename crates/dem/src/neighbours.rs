@@ -90,7 +90,7 @@ impl DemSystem {
         let owned = self.owned;
         let candidates: Vec<(u32, u32)> = cells
             .pairs_within(g, skin)
-            .into_iter()
+            .into_par_iter()
             .filter(|&(i, j)| (i as usize) < owned || (j as usize) < owned)
             .map(|(i, j)| {
                 if g.id[i as usize] < g.id[j as usize] {
@@ -101,7 +101,8 @@ impl DemSystem {
             })
             .collect();
         self.stretch = candidates
-            .iter()
+            .par_iter()
+            .with_min_len(1024)
             .map(|&(a, b)| {
                 live.get(&(g.id[a as usize], g.id[b as usize]))
                     .copied()

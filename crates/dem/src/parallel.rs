@@ -82,7 +82,7 @@ impl SlabDem {
         DemSystem::unstarted(all.clone(), check, allow_overlap)?;
         let mut s = Self::assemble(all, bounds, setup, comm)?;
         s.rebuild(comm, HistoryMap::default());
-        s.system.compute_forces();
+        s.system.compute_forces(None);
         Ok(s)
     }
 

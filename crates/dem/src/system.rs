@@ -47,6 +47,12 @@ pub(crate) type WallHit = (usize, [f64; 2], ContactForce, f64);
 /// does not touch).
 pub(crate) type PairResult = [f64; 5];
 
+/// Grains per task of a one-pass update of the owned grains: one chunk per thread, at least
+/// 2048 grains each (a task costs the pool a wake-up).
+fn pass_chunk(n: usize) -> usize {
+    n.div_ceil(rayon::current_num_threads()).max(2048)
+}
+
 /// The largest stable time step λ·Δt_cr for `grains` in contact under `model` (s): the
 /// critical step of seed eq. 5.59 for the lightest grain, times λ (eq. 5.60; around 0.1).
 pub fn stable_time_step(grains: &Grains, model: &ContactModel, lambda: f64) -> f64 {
@@ -166,7 +172,7 @@ impl DemSystem {
         };
         let mut s = Self::unstarted(grains, setup, allow_overlap)?;
         s.rebuild_list();
-        s.compute_forces();
+        s.compute_forces(None);
         Ok(s)
     }
 
@@ -375,54 +381,77 @@ impl DemSystem {
         self.second_half();
     }
 
-    /// Half kick and drift of the owned grains, walls move, time advances.
+    /// Half kick and drift of the owned grains, walls move, time advances. One pass over
+    /// the grains (each grain's kick, then its drift: element-wise, so the same bits at any
+    /// thread count).
     pub(crate) fn first_half(&mut self) {
         let dt = self.dt;
-        self.kick(0.5 * dt);
+        let h = 0.5 * dt;
         let n = self.owned;
-        let g = &mut self.grains;
-        let drift = |p: &mut [f64], v: &[f64]| {
-            p[..n]
-                .par_iter_mut()
-                .zip(v[..n].par_iter())
-                .with_min_len(4096)
-                .for_each(|(p, v)| *p += dt * v)
-        };
-        drift(&mut g.x, &g.vx);
-        drift(&mut g.y, &g.vy);
-        drift(&mut g.theta, &g.omega);
+        let fixed = &self.fixed;
+        let Grains {
+            x,
+            y,
+            theta,
+            vx,
+            vy,
+            omega,
+            fx,
+            fy,
+            torque,
+            m,
+            inv_inertia,
+            id,
+            ..
+        } = &mut self.grains;
+        let c = pass_chunk(n);
+        (
+            (
+                x[..n].par_chunks_mut(c),
+                y[..n].par_chunks_mut(c),
+                theta[..n].par_chunks_mut(c),
+            ),
+            (
+                vx[..n].par_chunks_mut(c),
+                vy[..n].par_chunks_mut(c),
+                omega[..n].par_chunks_mut(c),
+            ),
+            (
+                fx[..n].par_chunks(c),
+                fy[..n].par_chunks(c),
+                torque[..n].par_chunks(c),
+            ),
+            (
+                m[..n].par_chunks(c),
+                inv_inertia[..n].par_chunks(c),
+                id[..n].par_chunks(c),
+            ),
+        )
+            .into_par_iter()
+            .for_each(|((x, y, th), (vx, vy, w), (fx, fy, t), (m, inv, id))| {
+                for k in 0..x.len() {
+                    vx[k] += h * fx[k] / m[k];
+                    vy[k] += h * fy[k] / m[k];
+                    w[k] += h * t[k] * inv[k];
+                    if !fixed.is_empty() && fixed.binary_search(&id[k]).is_ok() {
+                        (vx[k], vy[k], w[k]) = (0.0, 0.0, 0.0);
+                    }
+                    x[k] += dt * vx[k];
+                    y[k] += dt * vy[k];
+                    th[k] += dt * w[k];
+                }
+            });
         for w in &mut self.walls {
             w.advance(dt);
         }
         self.time += dt;
     }
 
-    /// Forces at the new positions, then the second half kick.
+    /// Forces at the new positions, then the second half kick (in the forces' last pass).
     pub(crate) fn second_half(&mut self) {
-        self.compute_forces();
-        self.kick(0.5 * self.dt);
-        self.steps += 1;
-    }
-
-    fn kick(&mut self, h: f64) {
-        let n = self.owned;
-        let g = &mut self.grains;
-        // Element-wise, so parallel and still thread-count independent.
-        let linear = |v: &mut [f64], f: &[f64], m: &[f64]| {
-            v[..n]
-                .par_iter_mut()
-                .zip(f.par_iter().zip(m.par_iter()))
-                .with_min_len(4096)
-                .for_each(|(v, (f, m))| *v += h * f / m)
-        };
-        linear(&mut g.vx, &g.fx, &g.m);
-        linear(&mut g.vy, &g.fy, &g.m);
-        g.omega[..n]
-            .par_iter_mut()
-            .zip(g.torque.par_iter().zip(g.inv_inertia.par_iter()))
-            .with_min_len(4096)
-            .for_each(|(w, (t, inv))| *w += h * t * inv);
+        self.compute_forces(Some(0.5 * self.dt));
         self.hold_fixed();
+        self.steps += 1;
     }
 
     /// Zero the velocities of the owned grains held in place (none when nothing is fixed).
