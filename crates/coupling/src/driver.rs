@@ -90,6 +90,8 @@ pub struct LbmDem {
     mass: Vec<f64>,
     /// Per owned grain: its view.
     view_of: Vec<u32>,
+    /// Owned grains then ghosts, as [`LbmDem::refresh_views`] gathers them, by increasing id.
+    id_order: Vec<u32>,
     /// Per owned grain: the last exchange's load and the last remap's hand-over (lattice).
     load: Vec<Load>,
     handover: Vec<Load>,
@@ -290,6 +292,7 @@ impl LbmDem {
             source: Vec::new(),
             mass: Vec::new(),
             view_of: Vec::new(),
+            id_order: Vec::new(),
             load: vec![[0.0; 3]; owned],
             handover: vec![[0.0; 3]; owned],
             average: average_forces,
@@ -390,7 +393,7 @@ impl LbmDem {
         } else {
             Vec::new()
         };
-        let mut all: Vec<(GhostState, Source)> = owned
+        let all: Vec<(GhostState, Source)> = owned
             .into_iter()
             .enumerate()
             .map(|(i, s)| (s, Source::Owned(i as u32)))
@@ -400,9 +403,7 @@ impl LbmDem {
                     .map(|(s, side)| (s, Source::Ghost(side as u8))),
             )
             .collect();
-        all.sort_by_key(|(s, _)| s.id);
-        // Two ranks across a periodic face: a grain near both faces arrives once per side.
-        all.dedup_by_key(|(s, _)| s.id);
+        by_id(&all, &mut self.id_order);
         let (dx, dt) = (self.units.dx_m, self.units.dt_s);
         self.views.clear();
         self.ids.clear();
@@ -410,7 +411,14 @@ impl LbmDem {
         self.mass.clear();
         self.view_of.clear();
         self.view_of.resize(self.dem.system.owned(), 0);
-        for (v, (s, src)) in all.iter().enumerate() {
+        for &k in &self.id_order {
+            let (s, src) = &all[k as usize];
+            // Two ranks across a periodic face: a grain near both faces arrives once per
+            // side; the first in storage order is kept.
+            if self.ids.last() == Some(&s.id) {
+                continue;
+            }
+            let v = self.views.len();
             self.views.push(GrainView {
                 centre: [s.x[0] / dx, s.x[1] / dx],
                 radius: s.r / dx * self.hydro_ratio,
@@ -673,6 +681,20 @@ impl LbmDem {
             self.coupler
                 .add_pass(super::pass::REDUCE, t.elapsed().as_secs_f64());
         }
+    }
+}
+
+/// Fill `order` with the indices of `all` by increasing id, equal ids in storage order.
+/// The last call's order is kept when it still sorts `all`: the grains' storage order changes
+/// only when the DEM rebuilds its lists or grains migrate, so most steps check and sort
+/// nothing.
+fn by_id(all: &[(GhostState, Source)], order: &mut Vec<u32>) {
+    let key = |k: u32| (all[k as usize].0.id, k);
+    let still = order.len() == all.len() && order.windows(2).all(|w| key(w[0]) < key(w[1]));
+    if !still {
+        order.clear();
+        order.extend(0..all.len() as u32);
+        order.sort_unstable_by_key(|&k| key(k));
     }
 }
 

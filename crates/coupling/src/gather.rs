@@ -4,31 +4,37 @@
 //! the output ([`Shared`], [`row_of`]). The output is in source order whatever the thread
 //! count.
 
-/// A stable counting sort of `n` items by row (`row(i)` < `rows`): `order` receives the
-/// item indices grouped by row, in their original order within a row, and `offsets` the
-/// start of each row's group (rows + 1 values).
-pub fn group_by_row(
+/// A stable counting sort of `n` items by the rows each spans (`span(i)` = first and last
+/// row, inclusive, last < `rows`): `order` receives the item indices grouped by row, an item
+/// once in each row it spans, in their original order within a row, and `offsets` the start
+/// of each row's group (rows + 1 values).
+pub fn group_by_rows(
     n: usize,
     rows: usize,
-    row: impl Fn(usize) -> usize,
+    span: impl Fn(usize) -> [u32; 2],
     offsets: &mut Vec<u32>,
     order: &mut Vec<u32>,
 ) {
     offsets.clear();
     offsets.resize(rows + 1, 0);
     for i in 0..n {
-        offsets[row(i) + 1] += 1;
+        let [a, b] = span(i);
+        for y in a..=b {
+            offsets[y as usize + 1] += 1;
+        }
     }
     for y in 0..rows {
         offsets[y + 1] += offsets[y];
     }
     order.clear();
-    order.resize(n, 0);
+    order.resize(offsets[rows] as usize, 0);
     // offsets[r] serves as row r's cursor, then everything moves back by one row.
     for i in 0..n {
-        let r = row(i);
-        order[offsets[r] as usize] = i as u32;
-        offsets[r] += 1;
+        let [a, b] = span(i);
+        for y in a as usize..=b as usize {
+            order[offsets[y] as usize] = i as u32;
+            offsets[y] += 1;
+        }
     }
     for r in (1..=rows).rev() {
         offsets[r] = offsets[r - 1];
@@ -68,10 +74,20 @@ mod tests {
 
     #[test]
     fn rows_keep_their_order() {
-        let rows_of = [2usize, 0, 2, 1, 0, 2];
+        let rows_of = [2u32, 0, 2, 1, 0, 2];
         let (mut off, mut order) = (Vec::new(), Vec::new());
-        group_by_row(6, 3, |i| rows_of[i], &mut off, &mut order);
+        group_by_rows(6, 3, |i| [rows_of[i]; 2], &mut off, &mut order);
         assert_eq!(order, [1, 4, 3, 0, 2, 5]);
         assert_eq!(off, [0, 2, 3, 6]);
+    }
+
+    #[test]
+    fn an_item_comes_once_in_every_row_it_spans() {
+        let spans = [[1u32, 3], [0, 0], [2, 3], [0, 1]];
+        let (mut off, mut order) = (Vec::new(), Vec::new());
+        group_by_rows(4, 4, |i| spans[i], &mut off, &mut order);
+        // Row 0: items 1, 3; row 1: 0, 3; row 2: 0, 2; row 3: 0, 2.
+        assert_eq!(order, [1, 3, 0, 3, 0, 2, 0, 2]);
+        assert_eq!(off, [0, 2, 4, 6, 8]);
     }
 }

@@ -23,9 +23,10 @@ pub(super) struct PartialCells {
     pub(super) column_lines: Vec<ColumnLine>,
     pub(super) row_start: Vec<u32>,
     pub(super) row_lines: Vec<RowLine>,
-    /// Each grain image's rows (index into `disk_images`, row), and their order by row
-    /// with where each row starts.
-    pub(super) row_images: Vec<(u32, u32)>,
+    /// Each grain image as the map finds it (grain, image centre, first and last row it
+    /// reaches), and the images (indices into `disk_images`) by row, with where each row
+    /// starts.
+    pub(super) image_spans: Vec<(u32, [f64; 2], [u32; 2])>,
     pub(super) image_order: Vec<u32>,
     pub(super) image_rows: Vec<u32>,
     /// The plan of the last exchange.

@@ -2,7 +2,7 @@
 //! grain overlaps is collided as a blend of the fluid's operator and the solid's, weighted by
 //! the exact solid fraction.
 
-use super::gather::{group_by_row, row_of, Shared};
+use super::gather::{group_by_rows, row_of, Shared};
 use super::geometry::{
     box_lines, column_line, row_line, CellAreas, ColumnLine, RowLine, TABLE_PAD,
 };
@@ -30,30 +30,29 @@ impl PartialCells {
         views: &[GrainView],
     ) {
         let f = *f;
-        // The grain images that reach the slab's rows, each one's rows, and where its line
-        // tables start (a box's lines are counted here, so the tables take one parallel
-        // pass: each pass costs the pool a wake-up).
+        // The grain images that reach the slab's rows and each one's rows (found in
+        // parallel, in grain order), then where its line tables start (a box's lines are
+        // counted here, so the tables take one parallel pass: each pass costs the pool a
+        // wake-up).
+        self.image_spans.clear();
+        self.image_spans
+            .par_extend(views.par_iter().enumerate().flat_map_iter(|(g, grain)| {
+                f.images(grain).filter_map(move |c| {
+                    let (ya, yb) = share_rows(&f, c, grain.radius);
+                    (ya <= yb).then_some((g as u32, c, [ya as u32, yb as u32]))
+                })
+            }));
         self.disk_images.clear();
-        self.row_images.clear();
         self.column_start.clear();
         self.row_start.clear();
         let (mut n_columns, mut n_rows) = (0u32, 0u32);
-        for (g, grain) in views.iter().enumerate() {
-            for c in f.images(grain) {
-                let (ya, yb) = share_rows(&f, c, grain.radius);
-                if ya > yb {
-                    continue;
-                }
-                let image = self.disk_images.len() as u32;
-                self.disk_images.push((g as u32, c));
-                for y in ya..=yb {
-                    self.row_images.push((image, y as u32));
-                }
-                self.column_start.push(n_columns);
-                self.row_start.push(n_rows);
-                n_columns += (box_lines(c[0], grain.radius).1 + TABLE_PAD) as u32;
-                n_rows += box_lines(c[1], grain.radius).1 as u32;
-            }
+        for &(g, c, _) in &self.image_spans {
+            let r = views[g as usize].radius;
+            self.disk_images.push((g, c));
+            self.column_start.push(n_columns);
+            self.row_start.push(n_rows);
+            n_columns += (box_lines(c[0], r).1 + TABLE_PAD) as u32;
+            n_rows += box_lines(c[1], r).1 as u32;
         }
         self.column_start.push(n_columns);
         self.row_start.push(n_rows);
@@ -108,11 +107,11 @@ impl PartialCells {
                 radius: r,
             }
         };
-        let images = &self.row_images;
-        group_by_row(
-            images.len(),
+        let spans = &self.image_spans;
+        group_by_rows(
+            spans.len(),
             f.ny,
-            |i| images[i].1 as usize,
+            |i| spans[i].2,
             &mut self.image_rows,
             &mut self.image_order,
         );
@@ -120,7 +119,7 @@ impl PartialCells {
         let in_row = |y: usize| {
             order[starts[y] as usize..starts[y + 1] as usize]
                 .iter()
-                .map(|&i| images[i as usize].0 as usize)
+                .map(|&i| i as usize)
         };
         // One pass per row, its shares still in cache when sorted and counted.
         let (avx512, types) = (lbm::lanes::has_avx512(), lat.padded_cell_types());

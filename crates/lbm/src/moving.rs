@@ -374,24 +374,38 @@ fn zero<V: Default + Copy + Send>(v: &mut [V]) {
 /// [`NO_SLOT`] (a group's bodies, or a box across blocks, would be added to by two tasks;
 /// the host collects them).
 fn block_slots(cols: &mut BodyColumns, h: usize) {
+    // Which bodies get a slot, found in parallel (a serial walk over every group kept the
+    // other threads idle), then set.
+    let found: Vec<(u32, i64)> = {
+        let cols: &BodyColumns = cols;
+        (0..cols.groups.len().saturating_sub(1))
+            .into_par_iter()
+            .with_min_len(1024)
+            .filter_map(|j| {
+                let &[b] = cols.group(j) else {
+                    return None;
+                };
+                let bx = cols.boxes[b as usize];
+                let (first, last) = (bx[2] as usize, (bx[2] + bx[3]).max(1) as usize - 1);
+                if first / h != last / h {
+                    return None;
+                }
+                let columns = cols.columns(j);
+                // The group's slots are its columns (the writes through `ShareSums` rely
+                // on it).
+                assert_eq!(
+                    cols.first[j + 1] - cols.first[j],
+                    columns[1],
+                    "group {j}'s slots are not its columns"
+                );
+                Some((b, cols.first[j] as i64 - columns[0] as i64))
+            })
+            .collect()
+    };
     cols.body_slot.clear();
     cols.body_slot.resize(cols.boxes.len(), NO_SLOT);
-    for j in 0..cols.groups.len() - 1 {
-        let &[b] = cols.group(j) else {
-            continue;
-        };
-        let bx = cols.boxes[b as usize];
-        let (first, last) = (bx[2] as usize, (bx[2] + bx[3]).max(1) as usize - 1);
-        if first / h == last / h {
-            let columns = cols.columns(j);
-            // The group's slots are its columns (the writes through `ShareSums` rely on it).
-            assert_eq!(
-                cols.first[j + 1] - cols.first[j],
-                columns[1],
-                "group {j}'s slots are not its columns"
-            );
-            cols.body_slot[b as usize] = cols.first[j] as i64 - columns[0] as i64;
-        }
+    for (b, slot) in found {
+        cols.body_slot[b as usize] = slot;
     }
 }
 
