@@ -8,27 +8,30 @@
 //! of ranks (tested with mpirun).
 
 use super::exchange::{Coupler, CouplingError, Unstable};
-use super::ghosts::{GhostState, GrainHalo};
+use super::ghosts::GrainHalo;
 use super::map::{GrainView, SlabFrame};
-use super::sums::{total, ColumnSums, Load};
+use super::sums::Load;
 use super::{Refill, Scheme};
 use decomposition::{Comm, SlabPartition};
 use dem::walls::{apply_walls, WallStates};
 use dem::{DemError, DemSetup, DemSystem, Grains, SlabDem};
-use lbm::lattice::{Face, FaceCondition};
+use lbm::lattice::FaceCondition;
 use lbm::moving::MovingCells;
 use lbm::units::Units;
-use lbm::{FluidBackend, Lattice, Real};
-use rayon::prelude::*;
+use lbm::{FluidBackend, Real};
 use thiserror::Error;
 
 mod handoff;
+mod reduce;
 mod report;
 mod repulsion;
 mod setup;
+mod views;
 
 pub use handoff::CouplingCounters;
+use reduce::Which;
 pub use setup::{check_grains, fluid_walls, MIN_CELLS_PER_DIAMETER};
+use setup::{grain_reach, slab_bounds_m, slab_error, slab_frame};
 
 /// Where a grain in view comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,18 +60,6 @@ pub struct RestoredCoupling {
     /// Per grain, by id: external force held (SI), the previous hydrodynamic force (SI)
     /// and the pending hand-over (lattice units).
     pub per_grain: Vec<(u64, [f64; 9])>,
-}
-
-/// A DEM error from spreading the grains over the slabs: the rank count is the scene's to
-/// change.
-fn slab_error(e: DemError) -> SetupError {
-    match e {
-        DemError::Parameter { name: "ranks", .. } => SetupError::Invalid {
-            key: "ranks",
-            message: format!("{e} (the grains follow the fluid's slabs)"),
-        },
-        e => SetupError::Dem(e),
-    }
 }
 
 /// Grains coupled to this rank's slab of the fluid.
@@ -163,62 +154,6 @@ pub enum SetupError {
     /// The DEM refused the grains.
     #[error(transparent)]
     Dem(#[from] DemError),
-}
-
-/// The x-boundaries of the ranks' slabs (m), from the fluid's column partition.
-fn slab_bounds_m(partition: &SlabPartition, dx_m: f64, comm: &dyn Comm) -> Vec<f64> {
-    (0..=comm.size())
-        .map(|r| {
-            let x = if r < comm.size() {
-                partition.slab(r).x_begin
-            } else {
-                partition.columns()
-            };
-            x as f64 * dx_m
-        })
-        .collect()
-}
-
-/// How far beyond its slab a rank must see grains (m): a neighbour sees a grain that
-/// reaches its cells (two cells beyond the radius, plus the halo column) or that can repel
-/// one of its grains (`range`). An error when a slab is narrower than a grain's reach.
-fn grain_reach(
-    rmax: f64,
-    range: f64,
-    dx_m: f64,
-    partition: &SlabPartition,
-    comm: &dyn Comm,
-) -> Result<f64, SetupError> {
-    let margin = (3.0 * dx_m).max(rmax + range + DemSystem::skin_for(rmax) + dx_m);
-    let narrowest = (0..comm.size())
-        .map(|r| partition.slab(r).width())
-        .min()
-        .unwrap_or(0) as f64
-        * dx_m;
-    if comm.size() > 1 && narrowest < 2.0 * rmax + margin {
-        return Err(SetupError::Invalid {
-            key: "ranks",
-            message: format!(
-                "a fluid slab is {narrowest} m wide, narrower than a grain's reach \
-                 ({:.3e} m): run on fewer ranks",
-                2.0 * rmax + margin
-            ),
-        });
-    }
-    Ok(margin)
-}
-
-/// This rank's slab of the lattice as the coupling sees it.
-fn slab_frame<T: Real>(lat: &Lattice<T>, faces: &[FaceCondition; 4]) -> SlabFrame {
-    SlabFrame {
-        nx: lat.nx(),
-        ny: lat.ny(),
-        x0: lat.x_offset(),
-        global_nx: lat.global_nx(),
-        stride: lat.stride(),
-        periodic_x: faces[Face::West as usize] == FaceCondition::Periodic,
-        periodic_y: faces[Face::South as usize] == FaceCondition::Periodic,
-    }
 }
 
 impl LbmDem {
@@ -367,142 +302,6 @@ impl LbmDem {
     /// Grains in view (owned and ghosts, increasing id), lattice units.
     pub fn views(&self) -> &[GrainView] {
         &self.views
-    }
-
-    /// Owned grains as their ghosts see them.
-    fn owned_states(&self) -> Vec<GhostState> {
-        let g = &self.dem.system.grains;
-        (0..self.dem.system.owned())
-            .map(|i| GhostState {
-                id: g.id[i],
-                x: [g.x[i], g.y[i]],
-                r: g.r[i],
-                m: g.m[i],
-                v: [g.vx[i], g.vy[i]],
-                omega: g.omega[i],
-            })
-            .collect()
-    }
-
-    /// Exchange ghosts with the neighbours and rebuild the views: owned and ghost grains in
-    /// increasing id, in lattice units. Collective.
-    fn refresh_views(&mut self, comm: &dyn Comm) {
-        let owned = self.owned_states();
-        let ghosts = if self.halo.has_peers() {
-            self.halo.exchange_states(comm, &owned)
-        } else {
-            Vec::new()
-        };
-        let all: Vec<(GhostState, Source)> = owned
-            .into_iter()
-            .enumerate()
-            .map(|(i, s)| (s, Source::Owned(i as u32)))
-            .chain(
-                ghosts
-                    .into_iter()
-                    .map(|(s, side)| (s, Source::Ghost(side as u8))),
-            )
-            .collect();
-        by_id(&all, &mut self.id_order);
-        let (dx, dt) = (self.units.dx_m, self.units.dt_s);
-        self.views.clear();
-        self.ids.clear();
-        self.source.clear();
-        self.mass.clear();
-        self.view_of.clear();
-        self.view_of.resize(self.dem.system.owned(), 0);
-        for &k in &self.id_order {
-            let (s, src) = &all[k as usize];
-            // Two ranks across a periodic face: a grain near both faces arrives once per
-            // side; the first in storage order is kept.
-            if self.ids.last() == Some(&s.id) {
-                continue;
-            }
-            let v = self.views.len();
-            self.views.push(GrainView {
-                centre: [s.x[0] / dx, s.x[1] / dx],
-                radius: s.r / dx * self.hydro_ratio,
-                velocity: [s.v[0] * dt / dx, s.v[1] * dt / dx],
-                omega: s.omega * dt,
-            });
-            self.ids.push(s.id);
-            self.source.push(*src);
-            self.mass.push(s.m);
-            if let Source::Owned(i) = src {
-                self.view_of[*i as usize] = v as u32;
-            }
-        }
-    }
-
-    /// Each owned grain's total of `sums` (per-column partial sums over views): the ghosts'
-    /// partial sums go back to the ranks they came from, and every owner adds its grains'
-    /// columns in order. Collective.
-    fn reduce(&mut self, which: Which, comm: &dyn Comm) -> Vec<Load> {
-        let sums: &ColumnSums = match which {
-            Which::Exchange => self.coupler.loads(),
-            Which::Handover => self.coupler.handover_loads(),
-        };
-        let mut remote: Vec<(u64, u32, Load)> = Vec::new();
-        if self.halo.has_peers() {
-            let mut out = [Vec::new(), Vec::new()];
-            for (v, src) in self.source.iter().enumerate() {
-                if let Source::Ghost(side) = *src {
-                    sums.partials(v, &mut self.partials);
-                    let msg = &mut out[side as usize];
-                    msg.extend_from_slice(&[
-                        f64::from_bits(self.ids[v]),
-                        self.partials.len() as f64,
-                    ]);
-                    for (c, l) in &self.partials {
-                        msg.extend_from_slice(&[*c as f64, l[0], l[1], l[2]]);
-                    }
-                }
-            }
-            let got = self.halo.return_loads(comm, [&out[0], &out[1]]);
-            for msg in &got {
-                let mut at = 0;
-                while at < msg.len() {
-                    let (id, n) = (msg[at].to_bits(), msg[at + 1] as usize);
-                    for e in msg[at + 2..at + 2 + 4 * n].chunks_exact(4) {
-                        remote.push((id, e[0] as u32, [e[1], e[2], e[3]]));
-                    }
-                    at += 2 + 4 * n;
-                }
-            }
-            remote.sort_by_key(|r| (r.0, r.1));
-        }
-        // Each owned grain's total on its own: the same bits in any order. In parallel over
-        // the grains when there are threads to share it (on one thread a parallel region
-        // only adds the pool's wake-up).
-        let owned = self.dem.system.owned();
-        let (view_of, ids, remote) = (&self.view_of, &self.ids, &remote);
-        let grain_total = |partials: &mut Vec<(u32, Load)>, i: usize| {
-            let v = view_of[i] as usize;
-            let id = ids[v];
-            let from = remote.partition_point(|r| r.0 < id);
-            let to = remote.partition_point(|r| r.0 <= id);
-            if from == to {
-                // All its columns here: added in window order when that is column order.
-                if let Some(t) = sums.total_in_order(v) {
-                    return t;
-                }
-            }
-            sums.partials(v, partials);
-            partials.extend(remote[from..to].iter().map(|r| (r.1, r.2)));
-            total(partials)
-        };
-        let mut totals = Vec::with_capacity(owned);
-        if rayon::current_num_threads() > 1 {
-            (0..owned)
-                .into_par_iter()
-                .with_min_len(256)
-                .map_init(Vec::new, grain_total)
-                .collect_into_vec(&mut totals);
-        } else {
-            let partials = &mut self.partials;
-            totals.extend((0..owned).map(|i| grain_total(partials, i)));
-        }
-        totals
     }
 
     /// Stage "coupling" before the sweep: plan the cells at the grains' surfaces (see
@@ -682,25 +481,4 @@ impl LbmDem {
                 .add_pass(super::pass::REDUCE, t.elapsed().as_secs_f64());
         }
     }
-}
-
-/// Fill `order` with the indices of `all` by increasing id, equal ids in storage order.
-/// The last call's order is kept when it still sorts `all`: the grains' storage order changes
-/// only when the DEM rebuilds its lists or grains migrate, so most steps check and sort
-/// nothing.
-fn by_id(all: &[(GhostState, Source)], order: &mut Vec<u32>) {
-    let key = |k: u32| (all[k as usize].0.id, k);
-    let still = order.len() == all.len() && order.windows(2).all(|w| key(w[0]) < key(w[1]));
-    if !still {
-        order.clear();
-        order.extend(0..all.len() as u32);
-        order.sort_unstable_by_key(|&k| key(k));
-    }
-}
-
-/// Which per-column sums to reduce.
-#[derive(Clone, Copy)]
-enum Which {
-    Exchange,
-    Handover,
 }

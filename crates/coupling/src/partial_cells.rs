@@ -10,23 +10,31 @@ use decomposition::Comm;
 use lbm::moving::{BodyColumns, MovingCells, PlanKind, PsmPlan};
 use lbm::{FluidBackend, Lattice, Real};
 
+/// A grain image (the grain or a periodic copy) that reaches the slab's rows.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct DiskImage {
+    /// The grain: its index among the views.
+    pub(super) grain: u32,
+    /// The image's centre (lattice units).
+    pub(super) centre: [f64; 2],
+    /// The first and last row of the slab it reaches.
+    pub(super) rows: [u32; 2],
+}
+
 /// The partially saturated cells of one slab.
 #[derive(Default)]
 pub(super) struct PartialCells {
     /// Solid fractions by row, each row sorted by cell.
     pub(super) share_rows: Vec<ShareRow>,
-    /// The grain images that reach the slab (grain, image centre), with the line tables of
-    /// their exact cell areas (`geometry::CellAreas`: image i's vertical lines are
+    /// The grain images that reach the slab's rows, as the map finds them, with the line
+    /// tables of their exact cell areas (`geometry::CellAreas`: image i's vertical lines are
     /// `column_lines[column_start[i]..column_start[i + 1]]`, its horizontal lines likewise).
-    pub(super) disk_images: Vec<(u32, [f64; 2])>,
+    pub(super) disk_images: Vec<DiskImage>,
     pub(super) column_start: Vec<u32>,
     pub(super) column_lines: Vec<ColumnLine>,
     pub(super) row_start: Vec<u32>,
     pub(super) row_lines: Vec<RowLine>,
-    /// Each grain image as the map finds it (grain, image centre, first and last row it
-    /// reaches), and the images (indices into `disk_images`) by row, with where each row
-    /// starts.
-    pub(super) image_spans: Vec<(u32, [f64; 2], [u32; 2])>,
+    /// The images (indices into `disk_images`) by row, with where each row starts.
     pub(super) image_order: Vec<u32>,
     pub(super) image_rows: Vec<u32>,
     /// The plan of the last exchange.
@@ -91,8 +99,8 @@ impl Interface for PartialCells {
     }
 
     fn body(&self, b: usize) -> (usize, [f64; 2]) {
-        let (g, c) = self.disk_images[b];
-        (g as usize, c)
+        let d = self.disk_images[b];
+        (d.grain as usize, d.centre)
     }
 
     fn planned(&self) -> usize {
@@ -110,7 +118,7 @@ impl Interface for PartialCells {
     fn bad_cell(&self, n: usize) -> (usize, u32) {
         let s = self.psm.start[n] as usize;
         let image = self.psm.shares[s].body as usize;
-        (self.psm.cells[n] as usize, self.disk_images[image].0)
+        (self.psm.cells[n] as usize, self.disk_images[image].grain)
     }
 
     fn fill_rest<T: Real>(

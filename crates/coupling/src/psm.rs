@@ -8,7 +8,7 @@ use super::geometry::{
 };
 use super::interface::Common;
 use super::map::{share_rows, GrainView, Share, ShareRow, SlabFrame};
-use super::partial_cells::PartialCells;
+use super::partial_cells::{DiskImage, PartialCells};
 use super::row_walk::shares_in_row;
 use lbm::moving::{SolidShare, NO_SLOT};
 use lbm::{Lattice, Real};
@@ -34,21 +34,23 @@ impl PartialCells {
         // parallel, in grain order), then where its line tables start (a box's lines are
         // counted here, so the tables take one parallel pass: each pass costs the pool a
         // wake-up).
-        self.image_spans.clear();
-        self.image_spans
+        self.disk_images.clear();
+        self.disk_images
             .par_extend(views.par_iter().enumerate().flat_map_iter(|(g, grain)| {
                 f.images(grain).filter_map(move |c| {
                     let (ya, yb) = share_rows(&f, c, grain.radius);
-                    (ya <= yb).then_some((g as u32, c, [ya as u32, yb as u32]))
+                    (ya <= yb).then_some(DiskImage {
+                        grain: g as u32,
+                        centre: c,
+                        rows: [ya as u32, yb as u32],
+                    })
                 })
             }));
-        self.disk_images.clear();
         self.column_start.clear();
         self.row_start.clear();
         let (mut n_columns, mut n_rows) = (0u32, 0u32);
-        for &(g, c, _) in &self.image_spans {
-            let r = views[g as usize].radius;
-            self.disk_images.push((g, c));
+        for d in &self.disk_images {
+            let (c, r) = (d.centre, views[d.grain as usize].radius);
             self.column_start.push(n_columns);
             self.row_start.push(n_rows);
             n_columns += (box_lines(c[0], r).1 + TABLE_PAD) as u32;
@@ -59,7 +61,7 @@ impl PartialCells {
         // Each image's line tables. Every entry is written below, so only entries beyond
         // the old length need a value first.
         let disks = &self.disk_images;
-        let radius = |i: usize| views[disks[i].0 as usize].radius;
+        let radius = |i: usize| views[disks[i].grain as usize].radius;
         self.column_lines
             .resize(n_columns as usize, ColumnLine::default());
         self.row_lines.resize(n_rows as usize, RowLine::default());
@@ -72,7 +74,7 @@ impl PartialCells {
             .into_par_iter()
             .with_min_len(64)
             .for_each(|i| {
-                let (c, r) = (disks[i].1, radius(i));
+                let (c, r) = (disks[i].centre, radius(i));
                 // SAFETY: image i's entries [start[i], start[i + 1]) of each table are
                 // disjoint from every other image's and inside the table, which nothing
                 // else touches during the pass.
@@ -98,7 +100,7 @@ impl PartialCells {
             (&self.row_start, &self.row_lines),
         );
         let areas = |i: usize| {
-            let (c, r) = (disks[i].1, radius(i));
+            let (c, r) = (disks[i].centre, radius(i));
             CellAreas {
                 columns: &columns.1[columns.0[i] as usize..columns.0[i + 1] as usize],
                 rows: &rows.1[rows.0[i] as usize..rows.0[i + 1] as usize],
@@ -107,11 +109,10 @@ impl PartialCells {
                 radius: r,
             }
         };
-        let spans = &self.image_spans;
         group_by_rows(
-            spans.len(),
+            disks.len(),
             f.ny,
-            |i| spans[i].2,
+            |i| disks[i].rows,
             &mut self.image_rows,
             &mut self.image_order,
         );
@@ -132,7 +133,7 @@ impl PartialCells {
                 row.walked.clear();
                 row.stretches.clear();
                 for i in in_row(y) {
-                    let (g, c) = (disks[i].0 as usize, disks[i].1);
+                    let (g, c) = (disks[i].grain as usize, disks[i].centre);
                     let (r, exact) = (views[g].radius, areas(i));
                     let a = row.walked.len();
                     let out = &mut row.walked;
@@ -174,7 +175,7 @@ impl PartialCells {
         plan.bodies.extend(
             disks
                 .iter()
-                .map(|&(g, centre)| views[g as usize].motion(centre)),
+                .map(|d| views[d.grain as usize].motion(d.centre)),
         );
         // Where each row's cells and shares start.
         plan.rows.clear();
@@ -254,9 +255,9 @@ impl PartialCells {
         // Each grain image's window of its grain's column sums.
         let mut windows = std::mem::take(&mut c.body_windows);
         windows.clear();
-        windows.extend(self.disk_images.iter().map(|&(g, image)| {
-            let g = g as usize;
-            c.sums.window(g, views[g].centre[0], image[0])
+        windows.extend(self.disk_images.iter().map(|d| {
+            let g = d.grain as usize;
+            c.sums.window(g, views[g].centre[0], d.centre[0])
         }));
         let (plan, momentum) = (&self.psm, &self.share_momentum);
         let (disks, win) = (&self.disk_images, &windows);
@@ -272,7 +273,7 @@ impl PartialCells {
                     if rows.is_some() && slots[i] != NO_SLOT {
                         continue;
                     }
-                    let image = disks[i].1;
+                    let image = disks[i].centre;
                     let arm = [centre[0] - image[0], centre[1] - image[1]];
                     // The grain receives what the fluid gains, negated (seed eqs. 5.53–5.54).
                     let load = [p[0], p[1], arm[0] * p[1] - arm[1] * p[0]];

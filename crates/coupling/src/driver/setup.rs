@@ -1,8 +1,12 @@
-//! Setting the coupled grains up: the checks on the sample, and the DEM walls along the
-//! fluid's wall faces.
+//! Setting the coupled grains up: the checks on the sample, the DEM walls along the
+//! fluid's wall faces, and the slabs' bounds and reach.
 
-use dem::{Grains, Wall};
+use super::SetupError;
+use crate::map::SlabFrame;
+use decomposition::{Comm, SlabPartition};
+use dem::{DemError, DemSystem, Grains, Wall};
 use lbm::lattice::{Face, FaceCondition};
+use lbm::{Lattice, Real};
 
 /// Smallest grain diameter, in cells, below which the coupling refuses to run.
 pub const MIN_CELLS_PER_DIAMETER: f64 = 3.0;
@@ -91,4 +95,72 @@ pub fn fluid_walls(
         })
         .map(|&(_, a, b)| Wall::fixed(a, b, mu))
         .collect()
+}
+
+/// A DEM error from spreading the grains over the slabs: the rank count is the scene's to
+/// change.
+pub(super) fn slab_error(e: DemError) -> SetupError {
+    match e {
+        DemError::Parameter { name: "ranks", .. } => SetupError::Invalid {
+            key: "ranks",
+            message: format!("{e} (the grains follow the fluid's slabs)"),
+        },
+        e => SetupError::Dem(e),
+    }
+}
+
+/// The x-boundaries of the ranks' slabs (m), from the fluid's column partition.
+pub(super) fn slab_bounds_m(partition: &SlabPartition, dx_m: f64, comm: &dyn Comm) -> Vec<f64> {
+    (0..=comm.size())
+        .map(|r| {
+            let x = if r < comm.size() {
+                partition.slab(r).x_begin
+            } else {
+                partition.columns()
+            };
+            x as f64 * dx_m
+        })
+        .collect()
+}
+
+/// How far beyond its slab a rank must see grains (m): a neighbour sees a grain that
+/// reaches its cells (two cells beyond the radius, plus the halo column) or that can repel
+/// one of its grains (`range`). An error when a slab is narrower than a grain's reach.
+pub(super) fn grain_reach(
+    rmax: f64,
+    range: f64,
+    dx_m: f64,
+    partition: &SlabPartition,
+    comm: &dyn Comm,
+) -> Result<f64, SetupError> {
+    let margin = (3.0 * dx_m).max(rmax + range + DemSystem::skin_for(rmax) + dx_m);
+    let narrowest = (0..comm.size())
+        .map(|r| partition.slab(r).width())
+        .min()
+        .unwrap_or(0) as f64
+        * dx_m;
+    if comm.size() > 1 && narrowest < 2.0 * rmax + margin {
+        return Err(SetupError::Invalid {
+            key: "ranks",
+            message: format!(
+                "a fluid slab is {narrowest} m wide, narrower than a grain's reach \
+                 ({:.3e} m): run on fewer ranks",
+                2.0 * rmax + margin
+            ),
+        });
+    }
+    Ok(margin)
+}
+
+/// This rank's slab of the lattice as the coupling sees it.
+pub(super) fn slab_frame<T: Real>(lat: &Lattice<T>, faces: &[FaceCondition; 4]) -> SlabFrame {
+    SlabFrame {
+        nx: lat.nx(),
+        ny: lat.ny(),
+        x0: lat.x_offset(),
+        global_nx: lat.global_nx(),
+        stride: lat.stride(),
+        periodic_x: faces[Face::West as usize] == FaceCondition::Periodic,
+        periodic_y: faces[Face::South as usize] == FaceCondition::Periodic,
+    }
 }
