@@ -120,7 +120,8 @@ fn a_value_of_the_wrong_type_is_refused_naming_its_key_path() {
 
 /// The errors inside tagged tables name the key and its line: a wrong type in an inline
 /// table, a misspelled tag (with the near miss named), a missing key in the second element
-/// of an array of tables.
+/// of an array of tables, an unknown value of an enum inside an array of tables and of a
+/// tag.
 #[test]
 fn errors_inside_tagged_tables_name_the_key_and_line() {
     let path = root().join("jobs/cylinder/scene.toml");
@@ -138,6 +139,14 @@ fn errors_inside_tagged_tables_name_the_key_and_line() {
         (
             text.replace("name = \"back\"\n", ""),
             "`probes[2].name`: missing field `name`",
+        ),
+        (
+            text.replace("wall = \"interpolated\"", "wall = \"bogus\""),
+            ":28: `obstacles[0].wall`: unknown variant `bogus`",
+        ),
+        (
+            text.replace("north = { kind = \"wall\" }", "north = { kind = \"wal\" }"),
+            ":20: `boundaries.north.kind`: unknown variant `wal`",
         ),
     ];
     for (mutant, want) in cases {

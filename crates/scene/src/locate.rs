@@ -2,7 +2,8 @@
 //! "velocity", … }`, `[[obstacles]]`) whole before it knows its variant, so toml can only
 //! point at the table when a value inside it has the wrong type or a key is missing. The
 //! file is parsed again with its spans, the error's position is mapped to the innermost key
-//! around it, and a wrong type is traced to the value inside that table that has it.
+//! around it, and a wrong type or an unknown variant is traced to the value inside that
+//! table that has it.
 
 use super::SceneError;
 use serde::de::DeserializeOwned;
@@ -38,7 +39,7 @@ fn locate(text: &str, path: &Path, e: &toml::de::Error) -> SceneError {
     let (key, at, hint) = refine(text, &found, &message);
     SceneError::Invalid {
         path: path.to_owned(),
-        line: Some(text[..at.min(text.len())].lines().count().max(1)),
+        line: Some(text[..at.min(text.len())].matches('\n').count() + 1),
         key,
         message: format!("{message}{hint}"),
     }
@@ -127,10 +128,20 @@ fn in_array<'a, 'i>(
 }
 
 /// The key path, the byte offset to name the line of, and a hint: for a wrong type inside a
-/// table, the value in it that has that type; for a missing key, the table's keys that
-/// look like it.
+/// table, the value in it that has that type; for an unknown variant, the first string in
+/// it with that value; for a missing key, the table's keys that look like it.
 fn refine(text: &str, found: &Found, message: &str) -> (String, usize, String) {
     let whole = (found.path.clone(), found.span.start, String::new());
+    if let Some(rest) = message.strip_prefix("unknown variant `") {
+        // serde names the value, not its key: the string inside the table that has it.
+        let got = format!("string {:?}", rest.split('`').next().unwrap_or(""));
+        let mut leaves = Vec::new();
+        leaves_of(found.value, found.span.clone(), &found.path, &mut leaves);
+        return leaves
+            .into_iter()
+            .find(|(_, s)| matches(&text[s.clone()], &got))
+            .map_or(whole, |(p, s)| (p, s.start, String::new()));
+    }
     if let Some(rest) = message.strip_prefix("invalid type: ") {
         let got = rest.split(", expected").next().unwrap_or("");
         let mut leaves = Vec::new();
