@@ -37,6 +37,12 @@ pub struct StageStats {
     pub min_s: f64,
     /// Mean over ranks.
     pub mean_s: f64,
+    /// Of the stage's seconds, those a rank spent in communication (collectives and
+    /// waiting for messages: blocked on the other ranks, or moving data), the least and the
+    /// most over the ranks; absent for a stage its solver times without them. A stage whose
+    /// rank's own work is small against the others' shows up here.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wait_s: Option<[f64; 2]>,
 }
 
 /// The keys every `summary.json` starts with, whatever the solver (flattened into each
@@ -231,17 +237,52 @@ impl RunHeader {
             .iter()
             .flat_map(|c| c.seconds.iter().copied())
             .collect();
-        let (stages, slowest) = stage_stats(&names, &seconds, comm);
+        // NaN marks a stage timed without its waits (the same on every rank).
+        let waits: Vec<f64> = clocks
+            .iter()
+            .flat_map(|c| match &c.waits {
+                Some(w) => w.clone(),
+                None => vec![f64::NAN; c.names.len()],
+            })
+            .collect();
+        let (stages, slowest) = stage_stats(&names, &seconds, &waits, comm);
         self.stages = stages;
         self.stage_seconds = slowest;
     }
 }
 
-/// The seconds spent in each named stage of a step on this rank.
+/// The seconds spent in each named stage of a step on this rank, and of them those spent
+/// in communication where the clock was given them.
 #[derive(Debug, Clone)]
 pub struct StageClock {
     names: &'static [&'static str],
     seconds: Vec<f64>,
+    waits: Option<Vec<f64>>,
+}
+
+/// When a stage started: the wall clock and this rank's communication wait so far.
+#[derive(Debug, Clone, Copy)]
+pub struct Lap {
+    at: Instant,
+    wait_ns: u64,
+}
+
+impl Lap {
+    /// Start timing now.
+    pub fn start() -> Self {
+        Lap {
+            at: Instant::now(),
+            wait_ns: decomposition::Traffic::now().wait_ns,
+        }
+    }
+
+    /// Seconds since the start, and of them those spent in communication.
+    pub fn elapsed(&self) -> (f64, f64) {
+        let waited = decomposition::Traffic::now()
+            .wait_ns
+            .saturating_sub(self.wait_ns);
+        (self.at.elapsed().as_secs_f64(), waited as f64 * 1e-9)
+    }
 }
 
 impl StageClock {
@@ -250,18 +291,24 @@ impl StageClock {
         StageClock {
             names,
             seconds: vec![0.0; names.len()],
+            waits: Some(vec![0.0; names.len()]),
         }
     }
 
-    /// Add the time since `since` to `stage`. Panics on a name the clock was not made
-    /// with (a programming error, caught by every run).
-    pub fn add(&mut self, stage: &str, since: Instant) {
+    /// Add the time since `since` to `stage`, and its communication to the stage's wait.
+    /// Panics on a name the clock was not made with (a programming error, caught by every
+    /// run).
+    pub fn add(&mut self, stage: &str, since: Lap) {
         let k = self
             .names
             .iter()
             .position(|n| *n == stage)
             .unwrap_or_else(|| panic!("no stage {stage:?} among {:?}", self.names));
-        self.seconds[k] += since.elapsed().as_secs_f64();
+        let (seconds, waited) = since.elapsed();
+        self.seconds[k] += seconds;
+        if let Some(w) = &mut self.waits {
+            w[k] += waited;
+        }
     }
 
     /// Seconds per stage, in the order of the names.
@@ -276,29 +323,46 @@ impl StageClock {
         StageClock {
             names,
             seconds: seconds.to_vec(),
+            waits: None,
         }
+    }
+
+    /// The same clock, with the seconds of each stage spent in communication.
+    pub fn with_waits(mut self, waits: &[f64]) -> Self {
+        assert_eq!(self.names.len(), waits.len(), "one wait per stage");
+        self.waits = Some(waits.to_vec());
+        self
     }
 }
 
 /// Per-stage statistics over the ranks from each rank's `local` seconds (in the order of
-/// `names`), and the slowest rank's seconds per stage. Collective.
+/// `names`) and of them those spent in communication (`waits`, NaN where not timed: the
+/// same stages on every rank), and the slowest rank's seconds per stage. Collective.
 pub fn stage_stats(
     names: &[&'static str],
     local: &[f64],
+    waits: &[f64],
     comm: &dyn Comm,
 ) -> (
     BTreeMap<&'static str, StageStats>,
     BTreeMap<&'static str, f64>,
 ) {
-    let all = comm.all_gather_f64(local);
-    let ranks = comm.size();
+    let all = comm.all_gather_f64(&[local, waits].concat());
+    let (ranks, n) = (comm.size(), names.len());
     let mut stages = BTreeMap::new();
     let mut slowest = BTreeMap::new();
     for (k, name) in names.iter().enumerate() {
-        let v: Vec<f64> = (0..ranks).map(|r| all[r * names.len() + k]).collect();
+        let v: Vec<f64> = (0..ranks).map(|r| all[r * 2 * n + k]).collect();
+        let w: Vec<f64> = (0..ranks).map(|r| all[r * 2 * n + n + k]).collect();
         let sum: f64 = v.iter().sum();
         let max = v.iter().cloned().fold(0.0, f64::max);
         let min = v.iter().cloned().fold(f64::INFINITY, f64::min);
+        let wait_s = w.iter().all(|x| x.is_finite()).then(|| {
+            [
+                w.iter().cloned().fold(f64::INFINITY, f64::min),
+                w.iter().cloned().fold(0.0, f64::max),
+            ]
+        });
         stages.insert(
             *name,
             StageStats {
@@ -306,6 +370,7 @@ pub fn stage_stats(
                 max_s: max,
                 min_s: min,
                 mean_s: sum / ranks as f64,
+                wait_s,
             },
         );
         slowest.insert(*name, max);

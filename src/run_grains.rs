@@ -2,7 +2,7 @@
 //! driver's time loop over a [`GrainStepper`] — walls (removals), DEM step (with migration
 //! and ghost exchange inside), observations — and the analyses, checks and `summary.json`.
 
-use crate::driver::{RunHeader, StageClock};
+use crate::driver::{Lap, RunHeader, StageClock};
 use crate::progress::Progress;
 use crate::run::{RunError, RunOptions};
 use crate::time_loop::{drive, particle_last_step, Due, Flow, LoopEnd, LoopPlan, Stepper};
@@ -19,7 +19,6 @@ use io::grains_picture::write_grains_png;
 use scene::{GrainAnalysis, GrainScene, ValidGrainScene};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 pub(crate) mod sample;
 
@@ -105,7 +104,7 @@ impl Stepper for GrainStepper<'_> {
     }
 
     fn advance(&mut self, comm: &dyn Comm) -> Flow {
-        let t = Instant::now();
+        let t = Lap::start();
         let sys = &mut self.d.system;
         for (w, spec) in self.scene.scene.grains.walls.iter().enumerate() {
             if spec.remove_at_s.is_some_and(|r| sys.time >= r) && !sys.walls[w].removed {
@@ -113,14 +112,14 @@ impl Stepper for GrainStepper<'_> {
             }
         }
         self.clock.add("walls", t);
-        let t = Instant::now();
+        let t = Lap::start();
         self.d.step(comm);
         self.clock.add("dem", t);
         Flow::Go
     }
 
     fn observe(&mut self, comm: &dyn Comm, due: Due) -> Result<Flow, RunError> {
-        let t = Instant::now();
+        let t = Lap::start();
         let flow = self.health(comm, due);
         self.clock.add("observe", t);
         Ok(flow)

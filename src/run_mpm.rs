@@ -2,7 +2,7 @@
 //! the solver's timed stages (sort, P2G with the strip exchange, grid, stress, G2P,
 //! migration) plus output, and at the end the analyses, checks and `summary.json`.
 
-use crate::driver::{RunHeader, StageClock};
+use crate::driver::{Lap, RunHeader, StageClock};
 use crate::progress::Progress;
 use crate::run::{RunError, RunOptions, Status};
 use crate::time_loop::{drive, particle_last_step, Due, Flow, LoopEnd, LoopPlan, Stepper};
@@ -19,7 +19,6 @@ use mpm::{MpmError, MpmSystem, Points, Totals, MPM_STAGES};
 use scene::{GrainAnalysis, MpmScene, PictureField, ValidMpmScene};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// Everything an MPM run's `summary.json` holds.
 #[derive(Debug, Clone, Serialize)]
@@ -186,7 +185,7 @@ impl Stepper for MpmStepper<'_> {
         if !due.step.is_multiple_of(100) && !due.last {
             return Ok(Flow::Go);
         }
-        let t = Instant::now();
+        let t = Lap::start();
         let tot = self.sys.totals(comm)?;
         let stop = self.scene.scene.run.stop_below_specific_kinetic_energy_j_kg;
         let flow = if !tot.kinetic_energy.is_finite() {

@@ -1,6 +1,7 @@
 //! A simulation: the state of the physics a scene asked for, and `step()` as an ordered
 //! list of named, timed stages. A fluid-only scene holds only a lattice (this rank's slab).
 
+use crate::driver::Lap;
 use crate::error::RunError;
 use analysis::flows::{taylor_green_pressure, taylor_green_velocity};
 use coupling::{CouplingError, LbmDem};
@@ -15,7 +16,6 @@ use scene::{
     build_lattice, Backend, BuiltGeometry, GpuStorage, Initial, Kernel, Units, ValidScene,
 };
 use std::sync::Arc;
-use std::time::Instant;
 
 mod probes;
 mod rebalance;
@@ -90,6 +90,8 @@ pub mod stage {
 pub struct StageTimes {
     /// Seconds per entry of [`STAGES`].
     pub seconds: [f64; STAGES.len()],
+    /// Of them, the seconds spent in communication.
+    pub waits: [f64; STAGES.len()],
     /// Seconds of the steps spent in communication (collectives and waiting for messages,
     /// inside the stages): what the load balance takes away to find each rank's own work.
     pub waited: f64,
@@ -98,10 +100,17 @@ pub struct StageTimes {
 impl StageTimes {
     /// Run `f` and add its duration to stage `i`.
     pub fn time<R>(&mut self, i: usize, f: impl FnOnce() -> R) -> R {
-        let t = Instant::now();
+        let lap = Lap::start();
         let r = f();
-        self.seconds[i] += t.elapsed().as_secs_f64();
+        self.add(i, lap);
         r
+    }
+
+    /// Add the time since `lap` started, and its communication, to stage `i`.
+    pub fn add(&mut self, i: usize, lap: Lap) {
+        let (seconds, waited) = lap.elapsed();
+        self.seconds[i] += seconds;
+        self.waits[i] += waited;
     }
 }
 
@@ -377,15 +386,21 @@ impl<T: Real> Simulation<T> {
             self.times.time(stage::COUPLING, || c.plan(lat.as_ref()));
         }
         let wait0 = lat.lattice().halo_wait_seconds();
-        let t = Instant::now();
+        let lap = Lap::start();
         let r = match (&mut self.grains, &mut self.curved) {
             (Some(c), _) => lat.stream_collide_moving(comm, &mut c.moving()),
             (None, Some(w)) => lat.stream_collide_moving(comm, &mut w.moving()),
             (None, None) => lat.stream_collide(comm).map(|_| None),
         };
         let waited = lat.lattice().halo_wait_seconds() - wait0;
-        self.times.seconds[stage::COLLIDE_STREAM] += t.elapsed().as_secs_f64() - waited;
+        let (seconds, communication) = lap.elapsed();
+        self.times.seconds[stage::COLLIDE_STREAM] += seconds - waited;
         self.times.seconds[stage::HALO_WAIT] += waited;
+        // The halo wait is communication (none on one process, whose halo is a local
+        // copy); the sweep's own (a collective on an unstable cell) is the rest.
+        let halo = waited.min(communication);
+        self.times.waits[stage::COLLIDE_STREAM] += communication - halo;
+        self.times.waits[stage::HALO_WAIT] += halo;
         let bad = r?;
         if let Some(w) = &self.curved {
             let step = lat.lattice().steps_done();

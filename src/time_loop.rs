@@ -4,7 +4,7 @@
 //! and at the end the final snapshot and checkpoint. Fluid, coupled, grain and MPM runs
 //! differ only in their [`Stepper`].
 
-use crate::driver::{Signals, StageClock, Status};
+use crate::driver::{Lap, Signals, StageClock, Status};
 use crate::error::RunError;
 use crate::progress::Progress;
 use decomposition::Comm;
@@ -169,7 +169,7 @@ pub fn drive(
     progress.start_at(start_step);
     let mut snapshot_at = None;
     if !plan.restarted {
-        let t = Instant::now();
+        let t = Lap::start();
         stepper.snapshot(comm)?;
         snapshot_at = Some(start_step);
         clock.add("output", t);
@@ -219,7 +219,7 @@ pub fn drive(
             }
         }
         if due.snapshot {
-            let t = Instant::now();
+            let t = Lap::start();
             if let Cadence::Seconds(every) = plan.cadence {
                 if stepper.time_s() >= end.next_output_s {
                     end.next_output_s += every;
@@ -232,7 +232,7 @@ pub fn drive(
             clock.add("output", t);
         }
         if due.checkpoint {
-            let t = Instant::now();
+            let t = Lap::start();
             let sent = decomposition::Traffic::now();
             stepper.checkpoint(comm, &plan.checkpoint_path, end.next_output_s)?;
             output_traffic = output_traffic.plus(decomposition::Traffic::now().since(sent));
@@ -244,7 +244,7 @@ pub fn drive(
         // Not on the last step, nor when the run stops here (a signal's grace period is for
         // the final snapshot and checkpoint); the move's traffic is not a step's.
         if !due.last && !agreed.stop {
-            let t = Instant::now();
+            let t = Lap::start();
             let sent = decomposition::Traffic::now();
             stepper.rebalance(comm, due)?;
             output_traffic = output_traffic.plus(decomposition::Traffic::now().since(sent));
@@ -318,12 +318,12 @@ fn finish(
     if moved && written.0 != Some(step) {
         // A step that fails leaves the step count where it was: its snapshot is then the
         // last good state.
-        let t = Instant::now();
+        let t = Lap::start();
         stepper.snapshot(comm)?;
         clock.add("output", t);
     }
     if end.status == Status::Ok && plan.checkpoint_at_end && written.1 != Some(step) {
-        let t = Instant::now();
+        let t = Lap::start();
         stepper.checkpoint(comm, &plan.checkpoint_path, end.next_output_s)?;
         end.checkpoints.push(plan.checkpoint_path.clone());
         clock.add("checkpoint", t);

@@ -370,6 +370,40 @@ fn runs_report_their_communication_per_step() {
         "{least} .. {most} s of {} s",
         f(&b, "wall_time_s")
     );
+    // Per stage: none on one process; on two, within each rank's stage time, some, and no
+    // more than the ranks spent in communication over the steps (the least of those bounds
+    // the sum of each stage's least). Snapshots, checkpoints and moves are not a step's,
+    // and the probes stage also holds the probes recorded before the first step.
+    let stage_waits = |s: &serde_json::Value| -> Vec<(String, [f64; 2], f64)> {
+        s["stages"]
+            .as_object()
+            .unwrap()
+            .iter()
+            .map(|(k, v)| {
+                let w = &v["wait_s"];
+                let w = [0, 1].map(|i| w[i].as_f64().unwrap_or_else(|| panic!("{k}: {v}")));
+                (k.clone(), w, v["max_s"].as_f64().unwrap())
+            })
+            .collect()
+    };
+    for (k, w, _) in stage_waits(&a) {
+        assert_eq!(w, [0.0, 0.0], "{k} on one process");
+    }
+    let waits = stage_waits(&b);
+    for (k, [lo, hi], max) in &waits {
+        assert!(
+            0.0 <= *lo && lo <= hi && hi <= max,
+            "{k}: {lo} .. {hi} of {max} s"
+        );
+    }
+    let in_steps = waits
+        .iter()
+        .filter(|w| !["output", "checkpoint", "rebalance", "probes"].contains(&w.0.as_str()));
+    let (lows, highs): (f64, f64) = in_steps.fold((0.0, 0.0), |s, w| (s.0 + w.1[0], s.1 + w.1[1]));
+    assert!(
+        highs > 0.0 && lows <= least * (1.0 + 1e-9) + 1e-6,
+        "the stages' least waits sum to {lows} s, the most to {highs}; the steps {least} s"
+    );
     let out = std::process::Command::new("python3")
         .arg(root().join("scripts/scaling-model"))
         .args([&one, &two])

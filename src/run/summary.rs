@@ -106,7 +106,13 @@ fn coupling_figures<T: Real>(
         return (BTreeMap::new(), BTreeMap::new());
     };
     // Every rank of a coupled run holds grains (maybe none in view), so this is collective.
-    let seconds = stage_stats(&coupling::PASSES, &g.pass_seconds(), comm).1;
+    let seconds = stage_stats(
+        &coupling::PASSES,
+        &g.pass_seconds(),
+        &[f64::NAN; coupling::PASSES.len()],
+        comm,
+    )
+    .1;
     let mut v: Vec<f64> = g.counts().iter().map(|&c| c as f64).collect();
     comm.sum_f64(&mut v);
     let counts = coupling::COUNTS
@@ -174,7 +180,8 @@ pub(super) fn summarise<T: Real + hdf5::H5Type>(
     header.steps = steps;
     header.simulated_time_s = scene.units.time_si(steps);
     header.wall_time_s = wall;
-    let solver_clock = StageClock::with_seconds(&STAGES, &sim.times.seconds);
+    let solver_clock =
+        StageClock::with_seconds(&STAGES, &sim.times.seconds).with_waits(&sim.times.waits);
     header.set_traffic(end.traffic, comm);
     header.set_stages(&[&solver_clock, &end.clock], comm);
     let kernel_s = header.stage_seconds[STAGES[stage::COLLIDE_STREAM]];

@@ -3,6 +3,7 @@
 //! them, the same bits on any rank count.
 
 use super::{stage, Simulation};
+use crate::driver::Lap;
 use crate::error::RunError;
 use coupling::LbmDem;
 use decomposition::Comm;
@@ -12,7 +13,6 @@ use lbm::Real;
 use rayon::prelude::*;
 use scene::{solid_id_of, BuiltGeometry, Probe, ValidScene};
 use std::collections::{HashMap, HashSet};
-use std::time::Instant;
 
 /// Where a probe samples.
 pub(super) enum ProbeTarget {
@@ -249,7 +249,7 @@ impl<T: Real> Simulation<T> {
         if self.targets.is_empty() {
             return;
         }
-        let t0 = Instant::now();
+        let t0 = Lap::start();
         let step = self.fluid.lattice().steps_done();
         let t = self.units.time_si(step);
         let forces = if self
@@ -315,7 +315,7 @@ impl<T: Real> Simulation<T> {
                 }
             }
         }
-        self.times.seconds[stage::PROBES] += t0.elapsed().as_secs_f64();
+        self.times.add(stage::PROBES, t0);
     }
 
     /// Kinetic energy of the fluid outside the grains, J per metre of depth: Σ (1 − ε) ½ρ|u|²
