@@ -88,6 +88,21 @@ pub enum Command {
         /// Threads the run will use, for the wall-time estimate (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Judge the run `run --precision` would make.
+        #[arg(long, value_enum)]
+        precision: Option<PrecisionArg>,
+        /// Judge the run `run --backend` would make.
+        #[arg(long, value_enum)]
+        backend: Option<BackendArg>,
+        /// Judge the run `run --kernel` would make.
+        #[arg(long, value_enum)]
+        kernel: Option<KernelArg>,
+        /// Judge a run to this step, as `run --steps` would make it.
+        #[arg(long, value_parser = whole_steps, conflicts_with = "end_time")]
+        steps: Option<u64>,
+        /// Judge a run to this simulated time (s), as `run --end-time` would make it.
+        #[arg(long, value_name = "SECONDS", value_parser = positive_seconds)]
+        end_time: Option<f64>,
     },
     /// Print version, threads, ranks and the GPU adapters wgpu finds.
     Info {

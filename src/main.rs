@@ -86,22 +86,112 @@ fn real_main() -> Result<i32> {
             scene,
             ranks,
             threads,
-        } => check(&scene, ranks, threads),
+            precision,
+            backend,
+            kernel,
+            steps,
+            end_time,
+        } => {
+            let overrides = Overrides {
+                precision: precision.map(precision_of),
+                backend: backend.map(backend_of),
+                kernel: kernel.map(kernel_of),
+                steps,
+                end_time_s: end_time,
+            };
+            check(&scene, ranks, threads, &overrides)
+        }
         Command::StabilityMap { out, threads } => stability_map(out, threads),
         Command::Run(args) => run(args),
     }
 }
 
-/// `grainflow check SCENE`: validate any kind of scene and print what a run will use; a
-/// run that `run` would refuse for its size (on `ranks` ranks) fails the check.
-fn check(scene: &std::path::Path, ranks: usize, threads: Option<usize>) -> Result<i32> {
+/// The command line's overrides of a scene's `[run]`, as `run` takes them and `check`
+/// judges them.
+struct Overrides {
+    precision: Option<Precision>,
+    backend: Option<Backend>,
+    kernel: Option<Kernel>,
+    steps: Option<u64>,
+    end_time_s: Option<f64>,
+}
+
+impl Overrides {
+    /// `any` as the run with these overrides would see it. Precision and backend are the
+    /// fluid's: an error for a grains or MPM scene, as for `run`.
+    fn apply(&self, any: &mut scene::AnyScene) -> Result<()> {
+        let fluid_only = |kind: &str| {
+            if self.precision.is_some() || self.backend.is_some() {
+                anyhow::bail!(
+                    "--precision and --backend apply to the fluid; this is {kind} scene (f64 \
+                     on the CPU)"
+                );
+            }
+            Ok(())
+        };
+        let (steps, end_time_s) = match any {
+            scene::AnyScene::Fluid(s) => {
+                let run = &mut s.scene.run;
+                run.precision = self.precision.unwrap_or(run.precision);
+                run.backend = self.backend.unwrap_or(run.backend);
+                run.kernel = self.kernel.unwrap_or(run.kernel);
+                (&mut run.steps, &mut run.end_time_s)
+            }
+            scene::AnyScene::Grains(g) => {
+                fluid_only("a grains")?;
+                (&mut g.scene.run.steps, &mut g.scene.run.end_time_s)
+            }
+            scene::AnyScene::Mpm(m) => {
+                fluid_only("an MPM")?;
+                (&mut m.scene.run.steps, &mut m.scene.run.end_time_s)
+            }
+        };
+        if self.steps.is_some() || self.end_time_s.is_some() {
+            (*steps, *end_time_s) = (self.steps, self.end_time_s);
+        }
+        Ok(())
+    }
+}
+
+fn precision_of(p: PrecisionArg) -> Precision {
+    match p {
+        PrecisionArg::F32 => Precision::F32,
+        PrecisionArg::F64 => Precision::F64,
+    }
+}
+
+fn backend_of(b: BackendArg) -> Backend {
+    match b {
+        BackendArg::Cpu => Backend::Cpu,
+        BackendArg::Gpu => Backend::Gpu,
+    }
+}
+
+fn kernel_of(k: KernelArg) -> Kernel {
+    match k {
+        KernelArg::Auto => Kernel::Auto,
+        KernelArg::TwoArray => Kernel::TwoArray,
+        KernelArg::InPlace => Kernel::InPlace,
+    }
+}
+
+/// `grainflow check SCENE`: validate any kind of scene and print what a run will use (with
+/// `overrides`, the run those options of `run` make); a run that `run` would refuse for its
+/// size (on `ranks` ranks) fails the check.
+fn check(
+    scene: &std::path::Path,
+    ranks: usize,
+    threads: Option<usize>,
+    overrides: &Overrides,
+) -> Result<i32> {
     if let Some(t) = threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
             .context("setting up the thread pool")?;
     }
-    let any = grainflow::scene::load_any(scene)?;
+    let mut any = grainflow::scene::load_any(scene)?;
+    overrides.apply(&mut any)?;
     let memory = grainflow::budget::machine_memory_bytes();
     let report = grainflow::check::assess(&any, ranks, memory, true);
     // What was assessed before a refusal is printed first, as it always was.
@@ -280,27 +370,17 @@ fn run(args: RunArgs) -> Result<i32> {
     .spins_here(comm);
     let opts = RunOptions {
         out_dir: out.unwrap_or_else(|| default_out(&scene)),
-        precision: precision.map(|p| match p {
-            PrecisionArg::F32 => Precision::F32,
-            PrecisionArg::F64 => Precision::F64,
-        }),
+        precision: precision.map(precision_of),
         steps,
         end_time_s: end_time,
         progress: !quiet,
         restart,
-        backend: backend.map(|b| match b {
-            BackendArg::Cpu => Backend::Cpu,
-            BackendArg::Gpu => Backend::Gpu,
-        }),
+        backend: backend.map(backend_of),
         gpu_storage: gpu_storage.map(|g| match g {
             GpuStorageArg::Native => GpuStorage::Native,
             GpuStorageArg::F16 => GpuStorage::F16,
         }),
-        kernel: kernel.map(|k| match k {
-            KernelArg::Auto => Kernel::Auto,
-            KernelArg::TwoArray => Kernel::TwoArray,
-            KernelArg::InPlace => Kernel::InPlace,
-        }),
+        kernel: kernel.map(kernel_of),
         force,
     };
     let fluid_only = |kind: &str| {

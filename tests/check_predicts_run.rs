@@ -185,3 +185,55 @@ fn whenever_check_passes_run_gets_past_validation() {
         "only {ran} of {passed} runs got past set-up in {LIMIT_S} s"
     );
 }
+
+/// `check` takes the options of `run` that change the run (precision, backend, kernel,
+/// length) and judges the run they make: f32 populations need less memory than f64 (the
+/// scene's own), the two-array kernel more than the in-place one, `--steps` and `--end-time` set the steps;
+/// precision on a grains scene is refused, as `run` refuses it.
+#[test]
+fn check_judges_the_run_the_command_line_makes() {
+    let scene = root().join("jobs/cylinder/scene.toml");
+    let scene = scene.to_str().unwrap();
+    let check = |extra: &[&str]| {
+        let args: Vec<&str> = ["check", scene].iter().chain(extra).copied().collect();
+        let (code, text) = grainflow_within(&args, Duration::from_secs(120));
+        assert_eq!(code, Some(0), "check {extra:?}:\n{text}");
+        let figure = |key: &str| -> f64 {
+            let line = text
+                .lines()
+                .find_map(|l| l.trim().strip_prefix(key))
+                .unwrap_or_else(|| panic!("no `{key}` in\n{text}"));
+            line.split_whitespace()
+                .find_map(|w| w.parse().ok())
+                .unwrap_or_else(|| panic!("no number in `{line}`"))
+        };
+        (figure("memory: about"), figure("steps:"))
+    };
+    let (f64_mib, steps) = check(&["--precision", "f64"]);
+    let (f32_mib, _) = check(&["--precision", "f32"]);
+    assert!(
+        f32_mib < f64_mib,
+        "f32 {f32_mib} MiB, f64 {f64_mib} MiB"
+    );
+    let (in_place, _) = check(&["--precision", "f64", "--kernel", "in-place"]);
+    let (two_array, _) = check(&["--precision", "f64", "--kernel", "two-array"]);
+    assert!(
+        two_array > in_place,
+        "two arrays {two_array} MiB, in place {in_place} MiB"
+    );
+    assert_eq!(check(&["--steps", "123"]).1, 123.0);
+    let half = check(&["--end-time", "12.5"]).1;
+    assert!(
+        (half - steps / 2.0).abs() <= 1.0,
+        "{half} steps for half of {steps}"
+    );
+    let grains = root().join("jobs/column-collapse/a4.toml");
+    let (code, text) = grainflow_within(
+        &["check", grains.to_str().unwrap(), "--precision", "f32"],
+        Duration::from_secs(60),
+    );
+    assert!(
+        code == Some(1) && text.contains("--precision and --backend apply to the fluid"),
+        "{code:?}: {text}"
+    );
+}
