@@ -211,10 +211,7 @@ fn check_judges_the_run_the_command_line_makes() {
     };
     let (f64_mib, steps) = check(&["--precision", "f64"]);
     let (f32_mib, _) = check(&["--precision", "f32"]);
-    assert!(
-        f32_mib < f64_mib,
-        "f32 {f32_mib} MiB, f64 {f64_mib} MiB"
-    );
+    assert!(f32_mib < f64_mib, "f32 {f32_mib} MiB, f64 {f64_mib} MiB");
     let (in_place, _) = check(&["--precision", "f64", "--kernel", "in-place"]);
     let (two_array, _) = check(&["--precision", "f64", "--kernel", "two-array"]);
     assert!(
