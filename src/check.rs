@@ -74,13 +74,7 @@ fn assess_into(
                 Precision::F32 => 4.0,
                 Precision::F64 => 8.0,
             };
-            Some(budget::fluid_cost(
-                s,
-                step_count(s, None, None),
-                bytes,
-                one,
-                ranks,
-            ))
+            Some(budget::fluid_cost(s, step_count(s), bytes, one, ranks))
         }
         scene::AnyScene::Grains(g) => {
             say!(out, "{}: valid grains scene", g.path.display());
@@ -92,8 +86,7 @@ fn assess_into(
             }
             g.planned_time_step().map(|dt| {
                 let r = &g.scene.run;
-                let steps =
-                    time_loop::particle_last_step((None, None), (r.steps, r.end_time_s), dt);
+                let steps = time_loop::particle_last_step(length_of(r.steps, r.end_time_s), dt);
                 say!(out, "  time step: {dt:.4e} s (the smallest grain's)");
                 let grains = g.estimated_grains().unwrap_or(0.0);
                 budget::grain_cost(grains, steps, ranks)
@@ -102,8 +95,7 @@ fn assess_into(
         scene::AnyScene::Mpm(m) => {
             print_mpm_check(m, out);
             let r = &m.scene.run;
-            let steps =
-                time_loop::particle_last_step((None, None), (r.steps, r.end_time_s), m.setup.dt);
+            let steps = time_loop::particle_last_step(length_of(r.steps, r.end_time_s), m.setup.dt);
             Some(budget::mpm_cost(m, steps, ranks))
         }
     };
@@ -510,4 +502,9 @@ fn rates_text(r: &stability::lbm::Rates) -> String {
         Some(c) => format!("{op}, Smagorinsky C_s = {c}"),
         None => op,
     }
+}
+
+/// A `[run]` section's length.
+fn length_of(steps: Option<u64>, end_time_s: Option<f64>) -> crate::run::Length {
+    crate::run::Length { steps, end_time_s }
 }

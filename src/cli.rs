@@ -3,7 +3,6 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
 use grainflow::run::{Backend, Kernel, Precision};
-use grainflow::scene;
 use std::path::PathBuf;
 
 /// grainflow: lattice Boltzmann fluid–grain flows for geomechanics.
@@ -217,53 +216,7 @@ pub struct RunArgs {
     pub force: bool,
 }
 
-/// The command line's overrides of a scene's `[run]`, as `run` takes them and `check`
-/// judges them.
-pub struct Overrides {
-    pub precision: Option<Precision>,
-    pub backend: Option<Backend>,
-    pub kernel: Option<Kernel>,
-    pub steps: Option<u64>,
-    pub end_time_s: Option<f64>,
-}
-
-impl Overrides {
-    /// `any` as the run with these overrides would see it. Precision and backend are the
-    /// fluid's: an error for a grains or MPM scene, as for `run`.
-    pub fn apply(&self, any: &mut scene::AnyScene) -> Result<()> {
-        let fluid_only = |kind: &str| {
-            if self.precision.is_some() || self.backend.is_some() {
-                anyhow::bail!(
-                    "--precision and --backend apply to the fluid; this is {kind} scene (f64 \
-                     on the CPU)"
-                );
-            }
-            Ok(())
-        };
-        let (steps, end_time_s) = match any {
-            scene::AnyScene::Fluid(s) => {
-                let run = &mut s.scene.run;
-                run.precision = self.precision.unwrap_or(run.precision);
-                run.backend = self.backend.unwrap_or(run.backend);
-                run.kernel = self.kernel.unwrap_or(run.kernel);
-                (&mut run.steps, &mut run.end_time_s)
-            }
-            scene::AnyScene::Grains(g) => {
-                fluid_only("a grains")?;
-                (&mut g.scene.run.steps, &mut g.scene.run.end_time_s)
-            }
-            scene::AnyScene::Mpm(m) => {
-                fluid_only("an MPM")?;
-                (&mut m.scene.run.steps, &mut m.scene.run.end_time_s)
-            }
-        };
-        if self.steps.is_some() || self.end_time_s.is_some() {
-            (*steps, *end_time_s) = (self.steps, self.end_time_s);
-        }
-        Ok(())
-    }
-}
-
+/// The scene's precision for `--precision`.
 pub fn precision_of(p: PrecisionArg) -> Precision {
     match p {
         PrecisionArg::F32 => Precision::F32,
@@ -271,6 +224,7 @@ pub fn precision_of(p: PrecisionArg) -> Precision {
     }
 }
 
+/// The scene's backend for `--backend`.
 pub fn backend_of(b: BackendArg) -> Backend {
     match b {
         BackendArg::Cpu => Backend::Cpu,
@@ -278,6 +232,7 @@ pub fn backend_of(b: BackendArg) -> Backend {
     }
 }
 
+/// The scene's kernel for `--kernel`.
 pub fn kernel_of(k: KernelArg) -> Kernel {
     match k {
         KernelArg::Auto => Kernel::Auto,

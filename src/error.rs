@@ -29,6 +29,9 @@ pub enum RunError {
     /// The run would take too many steps or too much memory (`--force` overrides).
     #[error("{0}")]
     TooLarge(String),
+    /// A command-line override does not apply to this kind of scene.
+    #[error("{0}")]
+    Override(String),
     /// SIGTERM arrived before the first step (while the sample settled).
     #[error("{0}")]
     Interrupted(String),

@@ -7,13 +7,12 @@ mod report;
 use anyhow::{Context, Result};
 use clap::Parser;
 use cli::{
-    backend_of, kernel_of, precision_of, Cli, Command, GpuStorageArg, Overrides, RunArgs,
-    WaitPolicyArg,
+    backend_of, kernel_of, precision_of, Cli, Command, GpuStorageArg, RunArgs, WaitPolicyArg,
 };
 use decomposition::{launched_by_mpi, Comm, MpiComm, SingleProcess};
 use grainflow::driver::RunHeader;
 use grainflow::pool::{in_pool, WaitPolicy};
-use grainflow::run::{run_on, step_count, GpuStorage, RunError, RunOptions, Status};
+use grainflow::run::{run_on, step_count, GpuStorage, Overrides, RunError, RunOptions, Status};
 use grainflow::scene;
 use report::{exit_code, report};
 
@@ -99,6 +98,7 @@ fn real_main() -> Result<i32> {
                 kernel: kernel.map(kernel_of),
                 steps,
                 end_time_s: end_time,
+                gpu_storage: None,
             };
             check(&scene, ranks, threads, &overrides)
         }
@@ -300,41 +300,29 @@ fn run(args: RunArgs) -> Result<i32> {
         WaitPolicyArg::Passive => WaitPolicy::Passive,
     }
     .spins_here(comm);
-    let opts = RunOptions {
-        out_dir: out.unwrap_or_else(|| default_out(&scene)),
+    let overrides = Overrides {
         precision: precision.map(precision_of),
-        steps,
-        end_time_s: end_time,
-        progress: !quiet,
-        restart,
         backend: backend.map(backend_of),
         gpu_storage: gpu_storage.map(|g| match g {
             GpuStorageArg::Native => GpuStorage::Native,
             GpuStorageArg::F16 => GpuStorage::F16,
         }),
         kernel: kernel.map(kernel_of),
+        steps,
+        end_time_s: end_time,
+    };
+    let mut any = scene::load_any(&scene)?;
+    let opts = RunOptions {
+        out_dir: out.unwrap_or_else(|| default_out(&scene)),
+        scene_length: overrides.apply(&mut any)?,
+        progress: !quiet,
+        restart,
         force,
     };
-    let fluid_only = |kind: &str| {
-        if opts.precision.is_some() || opts.backend.is_some() {
-            anyhow::bail!(
-                "--precision and --backend apply to the fluid; {} is {kind} scene (f64 on \
-                 the CPU)",
-                scene.display()
-            );
-        }
-        Ok(())
-    };
-    match scene::load_any(&scene)? {
+    match any {
         scene::AnyScene::Fluid(s) => in_pool(comm, spin, || run_fluid_scene(&s, &opts, spin, comm)),
-        scene::AnyScene::Grains(g) => {
-            fluid_only("a grains")?;
-            in_pool(comm, spin, || run_grain_scene(&g, &opts, comm))
-        }
-        scene::AnyScene::Mpm(m) => {
-            fluid_only("an MPM")?;
-            in_pool(comm, spin, || run_mpm_scene(&m, &opts, comm))
-        }
+        scene::AnyScene::Grains(g) => in_pool(comm, spin, || run_grain_scene(&g, &opts, comm)),
+        scene::AnyScene::Mpm(m) => in_pool(comm, spin, || run_mpm_scene(&m, &opts, comm)),
     }
 }
 
@@ -352,7 +340,7 @@ fn run_fluid_scene(
         eprintln!(
             "running {} ({} steps, τ = {:.4}, Ma = {:.3}, Re = {:.4}) on {} rank(s) × {} threads{}",
             s.path.display(),
-            step_count(s, opts.steps, opts.end_time_s),
+            step_count(s),
             s.units.tau,
             s.units.mach,
             s.units.reynolds,

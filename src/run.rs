@@ -15,8 +15,10 @@ use scene::{SceneError, ValidScene};
 use std::path::{Path, PathBuf};
 
 mod output;
+mod overrides;
 mod summary;
 use output::Output;
+pub use overrides::{Length, Overrides};
 use summary::summarise;
 pub use summary::Summary;
 
@@ -24,23 +26,15 @@ pub use crate::driver::{stage_stats, StageStats, Status};
 pub use crate::error::RunError;
 pub use scene::{Backend, GpuStorage, Kernel, Precision};
 
-/// Options from the command line that override or complement the scene.
+/// Options from the command line that complement the scene (its changes to the scene's
+/// `[run]` are [`Overrides`], applied to the scene before the run).
 #[derive(Debug, Clone)]
 pub struct RunOptions {
     /// Output folder.
     pub out_dir: PathBuf,
-    /// Precision override.
-    pub precision: Option<Precision>,
-    /// Backend override (the scene's `[run] backend` otherwise).
-    pub backend: Option<Backend>,
-    /// GPU population storage override (the scene's `[run] gpu_storage` otherwise).
-    pub gpu_storage: Option<GpuStorage>,
-    /// CPU kernel override (the scene's `[run] kernel` otherwise).
-    pub kernel: Option<Kernel>,
-    /// Length override: run to this step.
-    pub steps: Option<u64>,
-    /// Length override: run to this simulated time (s).
-    pub end_time_s: Option<f64>,
+    /// The scene's own length when [`Overrides::apply`] replaced it: a run shorter than
+    /// that reports its checks without judging them. `None`: the scene's length is its own.
+    pub scene_length: Option<Length>,
     /// Show progress (bar on a terminal, log lines otherwise).
     pub progress: bool,
     /// Continue from this checkpoint instead of the initial condition.
@@ -64,7 +58,7 @@ pub fn run_on(scene: &ValidScene, opts: &RunOptions, comm: &dyn Comm) -> Result<
         ensure_writable_dir(&opts.out_dir)?;
     }
     comm.barrier();
-    let precision = opts.precision.unwrap_or(scene.scene.run.precision);
+    let precision = scene.scene.run.precision;
     match precision {
         Precision::F32 => run_typed::<f32>(scene, opts, precision, comm),
         Precision::F64 => run_typed::<f64>(scene, opts, precision, comm),
@@ -94,14 +88,25 @@ pub fn check_quantities(scene: &ValidScene) -> Result<(), SceneError> {
     }
 }
 
-/// Number of steps a fluid run will take: `steps`, else `end_time_s` (s) in whole steps,
-/// else the scene's own `steps` or `end_time_s`.
-pub fn step_count(scene: &ValidScene, steps: Option<u64>, end_time_s: Option<f64>) -> u64 {
+/// Number of steps a fluid run will take: the scene's `[run] steps`, else its `end_time_s`
+/// (s) in whole steps (at least 1).
+pub fn step_count(scene: &ValidScene) -> u64 {
+    let run = &scene.scene.run;
+    fluid_steps(
+        scene,
+        Length {
+            steps: run.steps,
+            end_time_s: run.end_time_s,
+        },
+    )
+}
+
+/// The fluid steps of `length`: its steps, else its end time in whole steps (at least 1).
+fn fluid_steps(scene: &ValidScene, length: Length) -> u64 {
     let in_steps = |t: f64| (t / scene.units.dt_s).round().max(1.0) as u64;
-    steps
-        .or(end_time_s.map(in_steps))
-        .or(scene.scene.run.steps)
-        .unwrap_or_else(|| in_steps(scene.scene.run.end_time_s.unwrap_or(0.0)))
+    length
+        .steps
+        .unwrap_or_else(|| in_steps(length.end_time_s.unwrap_or(0.0)))
 }
 
 /// A fluid (or coupled) simulation as the driver's time loop steps it, with its output.
@@ -285,15 +290,10 @@ fn momenta<T: Real>(
     })
 }
 
-/// The backend, GPU storage and kernel of a run: the command line's, else the scene's.
-fn devices(
-    scene: &ValidScene,
-    opts: &RunOptions,
-    precision: Precision,
-) -> Result<(Backend, GpuStorage, Kernel), RunError> {
+/// The backend, GPU storage and kernel of the scene's run.
+fn devices(scene: &ValidScene) -> Result<(Backend, GpuStorage, Kernel), RunError> {
     let run = &scene.scene.run;
-    let backend = opts.backend.unwrap_or(run.backend);
-    let storage = opts.gpu_storage.unwrap_or(run.gpu_storage);
+    let (backend, storage, precision) = (run.backend, run.gpu_storage, run.precision);
     if storage == GpuStorage::F16 && (backend != Backend::Gpu || precision != Precision::F32) {
         return Err(scene
             .invalid(
@@ -304,7 +304,7 @@ fn devices(
             )
             .into());
     }
-    Ok((backend, storage, opts.kernel.unwrap_or(run.kernel)))
+    Ok((backend, storage, run.kernel))
 }
 
 /// Build the simulation of `scene`, from its initial condition or from `opts.restart`,
@@ -373,8 +373,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
     precision: Precision,
     comm: &dyn Comm,
 ) -> Result<Summary, RunError> {
-    let n = step_count(scene, opts.steps, opts.end_time_s);
-    let devices = devices(scene, opts, precision)?;
+    let n = step_count(scene);
+    let devices = devices(scene)?;
     let one_buffer = devices.0 == Backend::Cpu
         && crate::simulation::in_place(devices.2, scene.scene.grains.is_some());
     let bytes = std::mem::size_of::<T>() as f64;
@@ -418,8 +418,8 @@ fn run_typed<T: Real + hdf5::H5Type>(
     );
     let output = &scene.scene.output;
     let next = resume.map(|s| crate::time_loop::next_output_after(scene.units.time_si(s), output));
-    let plan =
-        LoopPlan::new(n, output, &opts.out_dir, next).scene_length(step_count(scene, None, None));
+    let own = opts.scene_length.map_or(n, |l| fluid_steps(scene, l));
+    let plan = LoopPlan::new(n, output, &opts.out_dir, next).scene_length(own);
     let end = drive(&mut stepper, &plan, &mut progress, comm)?;
     stepper.out.finish(comm);
     summarise(

@@ -4,7 +4,7 @@
 
 use crate::driver::{Lap, RunHeader, StageClock};
 use crate::progress::Progress;
-use crate::run::{RunError, RunOptions};
+use crate::run::{Length, RunError, RunOptions};
 use crate::time_loop::{drive, particle_last_step, Due, Flow, LoopEnd, LoopPlan, Stepper};
 use analysis::checks::evaluate;
 use analysis::collapse::{collapse_results, pile_shape, QUANTITIES};
@@ -255,11 +255,11 @@ pub fn run_grains(
     let g_abs = s.grains.gravity_m_s2[0].hypot(s.grains.gravity_m_s2[1]);
     let frame_speed = (2.0 * g_abs * height.max(1e-9)).sqrt();
     let dt = d.system.dt;
-    let last_step = particle_last_step(
-        (opts.steps, opts.end_time_s),
-        (s.run.steps, s.run.end_time_s),
-        dt,
-    );
+    let length = Length {
+        steps: s.run.steps,
+        end_time_s: s.run.end_time_s,
+    };
+    let last_step = particle_last_step(length, dt);
     // The packing before its settling trim holds more grains than the run: the scene's
     // estimate, as `check` gives it, bounds the peak.
     let held = scene.estimated_grains().unwrap_or(grains as f64);
@@ -279,11 +279,7 @@ pub fn run_grains(
         &opts.out_dir,
         resume.as_ref().map(|r| r.next_output_s),
     )
-    .scene_length(particle_last_step(
-        (None, None),
-        (s.run.steps, s.run.end_time_s),
-        dt,
-    ));
+    .scene_length(particle_last_step(opts.scene_length.unwrap_or(length), dt));
     let collapse_at = s
         .analyses
         .iter()

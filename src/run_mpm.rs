@@ -4,7 +4,7 @@
 
 use crate::driver::{Lap, RunHeader, StageClock};
 use crate::progress::Progress;
-use crate::run::{RunError, RunOptions, Status};
+use crate::run::{Length, RunError, RunOptions, Status};
 use crate::time_loop::{drive, particle_last_step, Due, Flow, LoopEnd, LoopPlan, Stepper};
 use analysis::checks::evaluate;
 use analysis::collapse::{
@@ -276,11 +276,11 @@ pub fn run_mpm(
         Some(r) => (r.points, Some(r.run)),
         None => (scene.points.clone(), None),
     };
-    let last_step = particle_last_step(
-        (opts.steps, opts.end_time_s),
-        (s.run.steps, s.run.end_time_s),
-        scene.setup.dt,
-    );
+    let length = Length {
+        steps: s.run.steps,
+        end_time_s: s.run.end_time_s,
+    };
+    let last_step = particle_last_step(length, scene.setup.dt);
     let done = resume.map_or(0, |r| r.step);
     let cost = crate::budget::mpm_cost(scene, last_step.saturating_sub(done), comm.size());
     crate::budget::admit(cost, comm, opts.force)?;
@@ -335,11 +335,7 @@ pub fn run_mpm(
         &opts.out_dir,
         resume.map(|r| r.next_output_s),
     )
-    .scene_length(particle_last_step(
-        (None, None),
-        (s.run.steps, s.run.end_time_s),
-        dt,
-    ));
+    .scene_length(particle_last_step(opts.scene_length.unwrap_or(length), dt));
     let mut stepper = MpmStepper {
         scene,
         out_dir: opts.out_dir.clone(),

@@ -340,17 +340,11 @@ pub fn next_output_after(t: f64, output: &Output) -> f64 {
     }
 }
 
-/// The step a grain or MPM run stops after: `--steps`, else `--end-time`, else the scene's
-/// `steps`, else its `end_time_s`, a time rounded up to the step that reaches it (`dt` in
-/// s).
-pub fn particle_last_step(
-    cli: (Option<u64>, Option<f64>),
-    scene: (Option<u64>, Option<f64>),
-    dt: f64,
-) -> u64 {
+/// The step a grain or MPM run of `length` stops after: its steps, else its end time
+/// rounded up to the step that reaches it (`dt` in s).
+pub fn particle_last_step(length: crate::run::Length, dt: f64) -> u64 {
     let reach = |t: f64| (t / dt).ceil() as u64;
-    cli.0
-        .or(cli.1.map(reach))
-        .or(scene.0)
-        .unwrap_or_else(|| reach(scene.1.unwrap_or(0.0)))
+    length
+        .steps
+        .unwrap_or_else(|| reach(length.end_time_s.unwrap_or(0.0)))
 }

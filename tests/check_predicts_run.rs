@@ -189,7 +189,8 @@ fn whenever_check_passes_run_gets_past_validation() {
 /// `check` takes the options of `run` that change the run (precision, backend, kernel,
 /// length) and judges the run they make: f32 populations need less memory than f64 (the
 /// scene's own), the two-array kernel more than the in-place one, `--steps` and `--end-time` set the steps;
-/// precision on a grains scene is refused, as `run` refuses it.
+/// a fluid option on a grains scene is refused by `check` and `run` alike, before `run`
+/// writes anything.
 #[test]
 fn check_judges_the_run_the_command_line_makes() {
     let scene = root().join("jobs/cylinder/scene.toml");
@@ -224,13 +225,34 @@ fn check_judges_the_run_the_command_line_makes() {
         (half - steps / 2.0).abs() <= 1.0,
         "{half} steps for half of {steps}"
     );
+    // One rule refuses a fluid option on a grains scene, in the same words for both.
     let grains = root().join("jobs/column-collapse/a4.toml");
-    let (code, text) = grainflow_within(
-        &["check", grains.to_str().unwrap(), "--precision", "f32"],
-        Duration::from_secs(60),
-    );
-    assert!(
-        code == Some(1) && text.contains("--precision and --backend apply to the fluid"),
-        "{code:?}: {text}"
-    );
+    let grains = grains.to_str().unwrap();
+    let out = std::env::temp_dir().join(format!("gf-refused-{}", std::process::id()));
+    let out = out.to_str().unwrap();
+    for (command, option) in [
+        ("check", "--precision"),
+        ("run", "--precision"),
+        ("run", "--kernel"),
+    ] {
+        let value = if option == "--kernel" {
+            "in-place"
+        } else {
+            "f32"
+        };
+        let mut args = vec![command, grains, option, value];
+        if command == "run" {
+            args.extend(["--out", out, "--quiet"]);
+        }
+        let (code, text) = grainflow_within(&args, Duration::from_secs(60));
+        let said = format!("{option} applies to the fluid; {grains} is a grains scene");
+        assert!(
+            code == Some(1) && text.contains(&said),
+            "{command} {option}: {code:?}: {text}"
+        );
+        assert!(
+            !std::path::Path::new(out).exists(),
+            "{command} {option}: the refused run wrote {out}"
+        );
+    }
 }

@@ -10,7 +10,7 @@ use common::gpu_parity::rel_diff;
 use common::{assert_checks_pass, root};
 use decomposition::SingleProcess;
 use grainflow::lbm::Real;
-use grainflow::run::{run, Backend, GpuStorage, Kernel, Precision, RunOptions, Status};
+use grainflow::run::{run, Backend, GpuStorage, Kernel, Overrides, Precision, RunOptions, Status};
 use grainflow::simulation::Simulation;
 use std::path::Path;
 use std::process::Command;
@@ -156,16 +156,17 @@ fn open_faces_and_outflow_agree_with_cpu() {
 fn run_on(path: &Path, backend: Backend, precision: Precision) -> grainflow::run::Summary {
     let scene = grainflow::scene::load(path).unwrap_or_else(|e| panic!("{e}"));
     let out = tempfile::tempdir().unwrap();
+    let mut scene = scene;
+    let overrides = Overrides {
+        precision: Some(precision),
+        backend: Some(backend),
+        ..Default::default()
+    };
     let opts = RunOptions {
         out_dir: out.path().to_path_buf(),
-        precision: Some(precision),
-        steps: None,
-        end_time_s: None,
+        scene_length: overrides.apply_fluid(&mut scene),
         progress: false,
         restart: None,
-        backend: Some(backend),
-        gpu_storage: None,
-        kernel: None,
         force: false,
     };
     run(&scene, &opts).unwrap_or_else(|e| panic!("{e}"))
@@ -334,16 +335,19 @@ fn fp16_storage_without_gpu_f32_is_refused() {
         (Backend::Cpu, Precision::F32),
         (Backend::Gpu, Precision::F64),
     ] {
-        let opts = RunOptions {
-            out_dir: out.path().to_path_buf(),
+        let mut scene = scene.clone();
+        let overrides = Overrides {
             precision: Some(precision),
-            steps: Some(1),
-            end_time_s: None,
-            progress: false,
-            restart: None,
             backend: Some(backend),
             gpu_storage: Some(GpuStorage::F16),
-            kernel: None,
+            steps: Some(1),
+            ..Default::default()
+        };
+        let opts = RunOptions {
+            out_dir: out.path().to_path_buf(),
+            scene_length: overrides.apply_fluid(&mut scene),
+            progress: false,
+            restart: None,
             force: false,
         };
         let e = match run(&scene, &opts) {

@@ -36,7 +36,7 @@ fn coupled_gpu_blow_up_names_the_cpus_step_cell_and_grain() {
         return;
     }
     use grainflow::run::Precision;
-    use grainflow::run::{run, RunOptions, Status};
+    use grainflow::run::{run, Overrides, RunOptions, Status};
     for scheme in ["bounce-back", "psm"] {
         // The first grain thrown at 1.5 lattice units a step.
         let text = std::fs::read_to_string(root().join("tests/scenes/mpi_grains_box.toml"))
@@ -53,16 +53,18 @@ fn coupled_gpu_blow_up_names_the_cpus_step_cell_and_grain() {
         let scene = grainflow::scene::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"));
         let error = |backend| {
             let out = tempfile::tempdir().unwrap();
+            let mut scene = scene.clone();
+            let overrides = Overrides {
+                precision: Some(Precision::F64),
+                backend: Some(backend),
+                kernel: Some(Kernel::TwoArray),
+                ..Default::default()
+            };
             let opts = RunOptions {
                 out_dir: out.path().to_path_buf(),
-                precision: Some(Precision::F64),
-                steps: None,
-                end_time_s: None,
+                scene_length: overrides.apply_fluid(&mut scene),
                 progress: false,
                 restart: None,
-                backend: Some(backend),
-                gpu_storage: None,
-                kernel: Some(Kernel::TwoArray),
                 force: false,
             };
             let s = run(&scene, &opts).unwrap_or_else(|e| panic!("{e}"));

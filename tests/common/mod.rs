@@ -3,7 +3,7 @@
 
 pub mod gpu_parity;
 
-use grainflow::run::{run, Precision, RunOptions, Status, Summary};
+use grainflow::run::{run, Overrides, Precision, RunOptions, Status, Summary};
 use std::path::{Path, PathBuf};
 
 /// The step an instability error names ("unstable at step S: …").
@@ -42,19 +42,19 @@ fn run_valid(
     precision: Option<Precision>,
 ) -> (Summary, tempfile::TempDir) {
     let out = tempfile::tempdir().expect("temp dir");
+    let mut scene = scene.clone();
+    let overrides = Overrides {
+        precision,
+        ..Default::default()
+    };
     let opts = RunOptions {
         out_dir: out.path().to_path_buf(),
-        precision,
-        steps: None,
-        end_time_s: None,
+        scene_length: overrides.apply_fluid(&mut scene),
         progress: false,
         restart: None,
-        backend: None,
-        gpu_storage: None,
-        kernel: None,
         force: false,
     };
-    let s = run(scene, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let s = run(&scene, &opts).unwrap_or_else(|e| panic!("{e}"));
     (s, out)
 }
 
