@@ -20,7 +20,7 @@ fn result(s: &serde_json::Value, name: &str) -> f64 {
 #[test]
 fn the_small_landslide_and_its_dry_twin_fail_downslope_and_stop() {
     let dir = tempfile::tempdir().unwrap();
-    let mut runout = Vec::new();
+    let mut start = Vec::new();
     for name in ["sub-small-loose", "dry-small-loose"] {
         let out = dir.path().join(name);
         let o = grainflow(1, &["run", &scene(name), "--out", out.to_str().unwrap()]);
@@ -42,15 +42,18 @@ fn the_small_landslide_and_its_dry_twin_fail_downslope_and_stop() {
             t95 > 1.0 && t95 < 0.9 * end,
             "{name}: front t95 {t95} τ_c, end {end}"
         );
-        runout.push(r);
+        start.push(result(&s, "collapse.front_t10"));
     }
-    // The water slows the slide: a loose submerged mass of these grains runs out less far
-    // than its dry twin (viscous drag and pore-pressure feedback).
+    // The water delays the failure (Rondon et al. 2011; the fluid must enter the dilating
+    // pores): the submerged front moves off (t₁₀, in τ_c) well after the dry one, 2.5–4
+    // times later at every slope of the small and medium tables (docs/validation.md). Which
+    // of the two runs out further is not a robust trait of a few hundred grains: it flips
+    // with the packing at 15° and 20°.
     assert!(
-        runout[0] < runout[1],
-        "submerged {} against dry {}",
-        runout[0],
-        runout[1]
+        start[0] > 2.0 * start[1],
+        "submerged front t10 {} τ_c against dry {} τ_c",
+        start[0],
+        start[1]
     );
 }
 
