@@ -18,13 +18,13 @@ FRACTIONS = [0.0, 0.2, 0.4, 0.6, 1.0]
 
 
 def frames(run):
-    """(time_s, path) of a run's grain pictures, from its scene's end time and picture count."""
+    """(time_s, path) of a run's grain pictures, from its simulated time and picture count."""
     pics = sorted(p for p in os.listdir(os.path.join(run, "pictures"))
                   if p.startswith("grains_") and not p.startswith("grains_step"))
     if not pics:  # grains-only runs name pictures by DEM step
         pics = sorted(p for p in os.listdir(os.path.join(run, "pictures")) if p.startswith("grains_step"))
     steps = [int(p.split("_")[-1].split(".")[0]) for p in pics]
-    end = json.load(open(os.path.join(run, "summary.json")))["scene"]["run"]["end_time_s"]
+    end = json.load(open(os.path.join(run, "summary.json")))["simulated_time_s"]
     return [(end * s / steps[-1], os.path.join(run, "pictures", p)) for s, p in zip(steps, pics)]
 
 

@@ -152,9 +152,9 @@ struct CoupledLoad {
 
 /// The coupling's cost per grain and step, in updates of the measured fluid kernel: the
 /// coupling passes and what a grain's partially saturated or link cells add to the sweep.
-/// Measured on 2 cores, each run less its plain fluid sweep and its DEM stage: 1590 in the
+/// Measured on 2 cores, each run less its plain fluid sweep and its DEM stage: 1620 in the
 /// medium submarine landslide (dense, 10 994 grains of 4.6 cells across, 2 threads,
-/// flowing to its end), 1830 in the large one (208 778 grains, 2 ranks, at rest; measured
+/// flowing to its end; 1590 before its packing was numbered in space), 1830 in the large one (208 778 grains, 2 ranks, at rest; measured
 /// before partially saturated chunks with contacts were blended in lanes, which cut the
 /// medium one's from 3100) and about 1600 in the seed's Table 5.3 case (2500 disks); the
 /// estimate takes 1700, within 10 % of each.

@@ -44,8 +44,8 @@ fn the_small_landslide_and_its_dry_twin_fail_downslope_and_stop() {
         );
         start.push(result(&s, "collapse.front_t10"));
     }
-    // The water delays the failure (Rondon et al. 2011; the fluid must enter the dilating
-    // pores): the submerged front moves off (t₁₀, in τ_c) well after the dry one, 1.8–4.1
+    // The water delays the failure (Rondon et al. 2011; the fluid must flow through the
+    // pores for the grains to move): the submerged front moves off (t₁₀, in τ_c) well after the dry one, 1.8–4.1
     // times later in the small table, 2.5–4.0 in the medium one, 3.5 times here
     // (docs/validation.md). Which of the two runs out further is not a robust trait of a few
     // hundred grains: it changes with the packing's details.

@@ -125,6 +125,10 @@ fn every_kind_of_run_writes_the_same_summary_header() {
         }
         assert_eq!(s["solver"], solver);
         assert_eq!(s["steps"], 3, "{solver}");
+        assert_eq!(
+            s["shortened"], true,
+            "{solver}: 3 steps cut the scene short"
+        );
         assert!(s["stage_seconds"]
             .as_object()
             .is_some_and(|m| !m.is_empty()));

@@ -34,8 +34,8 @@ pub struct Overrides {
 
 impl Overrides {
     /// Rewrite `any`'s `[run]` as these overrides say. Postcondition: the scene describes
-    /// the run to make, with at most one of `steps` and `end_time_s` set when either
-    /// override is. Returns the scene's own length when the overrides replaced it (a run
+    /// the run to make, with exactly one of `steps` and `end_time_s` set when either
+    /// override is (`steps` when both are). Returns the scene's own length when the overrides replaced it (a run
     /// cut short of it is reported, not judged: [`super::RunOptions::scene_length`]).
     /// Errors, leaving `any` unchanged, when a fluid setting is given for a grains or MPM
     /// scene (those run in f64 on the CPU).
@@ -47,14 +47,18 @@ impl Overrides {
                 (self.gpu_storage.is_some(), "--gpu-storage"),
                 (self.kernel.is_some(), "--kernel"),
             ];
-            match fluid.iter().find(|f| f.0) {
-                Some((_, flag)) => Err(RunError::Override(format!(
-                    "{flag} applies to the fluid; {} is {kind} scene (f64 on the CPU): drop \
-                     {flag}",
-                    path.display()
-                ))),
-                None => Ok(()),
+            let given: Vec<&str> = fluid.iter().filter(|f| f.0).map(|f| f.1).collect();
+            if given.is_empty() {
+                return Ok(());
             }
+            let (flags, verb) = (
+                given.join(" and "),
+                ["applies", "apply"][given.len().min(2) - 1],
+            );
+            Err(RunError::Override(format!(
+                "{flags} {verb} to the fluid; {} is {kind} scene (f64 on the CPU): drop {flags}",
+                path.display()
+            )))
         };
         let (steps, end_time_s) = match any {
             AnyScene::Fluid(s) => return Ok(self.apply_fluid(s)),
@@ -67,15 +71,7 @@ impl Overrides {
                 (&mut m.scene.run.steps, &mut m.scene.run.end_time_s)
             }
         };
-        if self.steps.is_none() && self.end_time_s.is_none() {
-            return Ok(None);
-        }
-        let own = Length {
-            steps: *steps,
-            end_time_s: *end_time_s,
-        };
-        (*steps, *end_time_s) = (self.steps, self.end_time_s);
-        Ok(Some(own))
+        Ok(self.replace_length(steps, end_time_s))
     }
 
     /// [`Overrides::apply`] to a fluid (or coupled) scene, which takes every override.
@@ -85,14 +81,29 @@ impl Overrides {
         run.backend = self.backend.unwrap_or(run.backend);
         run.gpu_storage = self.gpu_storage.unwrap_or(run.gpu_storage);
         run.kernel = self.kernel.unwrap_or(run.kernel);
+        self.replace_length(&mut run.steps, &mut run.end_time_s)
+    }
+
+    /// Replace a `[run]`'s length (`steps`, `end_time_s`) with the overrides' (`steps`
+    /// first, when both are given); the scene's own length when it was replaced.
+    fn replace_length(
+        &self,
+        steps: &mut Option<u64>,
+        end_time_s: &mut Option<f64>,
+    ) -> Option<Length> {
         if self.steps.is_none() && self.end_time_s.is_none() {
             return None;
         }
         let own = Length {
-            steps: run.steps,
-            end_time_s: run.end_time_s,
+            steps: *steps,
+            end_time_s: *end_time_s,
         };
-        (run.steps, run.end_time_s) = (self.steps, self.end_time_s);
+        *steps = self.steps;
+        *end_time_s = if self.steps.is_some() {
+            None
+        } else {
+            self.end_time_s
+        };
         Some(own)
     }
 }

@@ -226,12 +226,14 @@ pub fn random_sequential_addition(
     in_bands(&g, cell)
 }
 
-/// `g` renumbered band by band: bands of height `band` (m) from the lowest grain up, and
-/// along x within a band. Grains near each other in space are then near each other in
+/// `g` renumbered band by band: bands of height `band` (m, > 0) from the lowest grain up,
+/// and along x within a band. Grains near each other in space are then near each other in
 /// number, so the passes that walk grains in id order (the coupling's map, its sums, a
-/// DEM without re-sorting) read their neighbours from nearby memory. Positions, radii and
-/// masses are unchanged; velocities and forces are not carried (a fresh sample's are zero).
-pub fn in_bands(g: &Grains, band: f64) -> Grains {
+/// DEM without re-sorting) read their neighbours from nearby memory. Each grain keeps its
+/// state (position, velocity, angle, radius, mass); forces are not carried, and ids are
+/// the new numbers.
+fn in_bands(g: &Grains, band: f64) -> Grains {
+    debug_assert!(band > 0.0, "band height {band}");
     let y0 = g.y.iter().cloned().fold(f64::INFINITY, f64::min);
     let key = |i: usize| (((g.y[i] - y0) / band).floor() as u64, g.x[i]);
     let mut order: Vec<usize> = (0..g.len()).collect();
@@ -243,6 +245,8 @@ pub fn in_bands(g: &Grains, band: f64) -> Grains {
     for i in order {
         let n = out.push([g.x[i], g.y[i]], g.r[i], 1.0, false);
         (out.m[n], out.inv_inertia[n]) = (g.m[i], g.inv_inertia[i]);
+        (out.vx[n], out.vy[n]) = (g.vx[i], g.vy[i]);
+        (out.theta[n], out.omega[n]) = (g.theta[i], g.omega[i]);
     }
     out
 }
@@ -323,8 +327,14 @@ mod tests {
             g.y.iter()
                 .map(|y| ((y - y0) / band).floor() as u64)
                 .collect();
-        for i in 1..g.len() {
+        for i in 0..g.len() {
             assert_eq!(g.id[i], i as u64);
+            let m = 2500.0 * std::f64::consts::PI * g.r[i] * g.r[i];
+            assert_eq!(g.m[i], m);
+            assert_eq!(g.inv_inertia[i], 1.0 / (0.5 * m * g.r[i] * g.r[i]));
+            if i == 0 {
+                continue;
+            }
             let later_band = bands[i] > bands[i - 1];
             assert!(
                 later_band || (bands[i] == bands[i - 1] && g.x[i] >= g.x[i - 1]),
@@ -334,8 +344,6 @@ mod tests {
                 g.x[i - 1],
                 g.y[i - 1]
             );
-            let m = 2500.0 * std::f64::consts::PI * g.r[i] * g.r[i];
-            assert_eq!(g.m[i], m);
         }
         // Renumbering moves grains, never changes them: the same disks as a second ordering.
         let again = in_bands(&g, 0.5 * band);
