@@ -173,7 +173,8 @@ impl Rng {
 /// sequential addition until the solid fraction reaches `solid_fraction` or `attempts`
 /// consecutive positions fail for the next radius (radii are placed in the order drawn, so
 /// the sample follows `sizes`). Grains lie wholly inside the rectangle. Deterministic in `seed`.
-/// The grains are numbered in space, not in the order placed ([`in_bands`]).
+/// The grains are numbered in space, not in the order placed: band by band (bands two radii
+/// high), along x in a band.
 pub fn random_sequential_addition(
     lo: [f64; 2],
     hi: [f64; 2],
